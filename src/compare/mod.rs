@@ -1,0 +1,1 @@
+//! Error metrics between images and false-colour error maps.

@@ -1,0 +1,30 @@
+//! # interreflect
+//!
+//! One-bounce glossy interreflections with spherical Gaussians (Xu et al., "A Practical Algorithm
+//! for Rendering Interreflections with All-Frequency BRDFs", TOG 2014), measured against a
+//! path-traced ground truth.
+//!
+//! Data flows one way:
+//!
+//! ```text
+//! scene (TOML + meshes) ──► accel (BVH) ──► render (reference | direct) ──► image (EXR/PNG) ──► compare
+//! ```
+//!
+//! - [`math`]: pure maths (frames, sampling, random streams); imports nothing from the crate.
+//! - [`brdf`]: exact analytic BRDF models with importance sampling.
+//! - [`scene`]: the scene-file schema, mesh loading, procedural shapes; immutable once loaded.
+//! - [`accel`]: the BVH (obvhs) for rays and occlusion.
+//! - [`render`]: the renderers (CPU, rayon).
+//! - [`image`]: image buffers, EXR/PNG I/O, tonemapping.
+//! - [`compare`]: error metrics and false-colour error maps.
+//! - [`fsutil`]: atomic output files.
+#![forbid(unsafe_code)]
+
+pub mod accel;
+pub mod brdf;
+pub mod compare;
+pub mod fsutil;
+pub mod image;
+pub mod math;
+pub mod render;
+pub mod scene;

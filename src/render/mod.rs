@@ -1,0 +1,2 @@
+//! Renderers.
+pub mod cpu;
