@@ -1,1 +1,609 @@
-//! scene
+//! Scenes: the TOML schema, validation, mesh loading, procedural shapes, camera and lights.
+//!
+//! A [`Scene`] is immutable once loaded: every object is transformed to world space and merged
+//! into one [`SceneMesh`], with a per-triangle object index.
+
+pub mod camera;
+pub mod light;
+pub mod mesh;
+pub mod schema;
+pub mod shapes;
+
+pub use camera::Camera;
+pub use light::Light;
+
+use crate::brdf::{Brdf, Distribution};
+use glam::{Mat3, Mat4, Quat, Vec3};
+use mesh::MeshData;
+use schema::*;
+use std::path::{Path, PathBuf};
+
+/// Largest accepted image side, triangle count per procedural shape and similar sanity limits.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+pub const MAX_SEGMENTS: u32 = 65536;
+pub const MAX_SUBDIVISIONS: u32 = 4096;
+/// Upper bound on samples per pixel accepted from scene files and the command line.
+pub const MAX_SPP: u32 = 1 << 20;
+
+/// Why a scene could not be loaded. Every message names the file and, where it applies, the field.
+#[derive(thiserror::Error, Debug)]
+pub enum SceneError {
+    #[error("{path}: cannot read the scene file: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    #[error("{path}: {field}: {message}")]
+    Invalid {
+        path: PathBuf,
+        field: String,
+        message: String,
+    },
+    #[error("{path}: {field}: {source}")]
+    Mesh {
+        path: PathBuf,
+        field: String,
+        source: mesh::MeshError,
+    },
+}
+
+/// A named material.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub brdf: Brdf,
+}
+
+/// An object: a range of triangles in the merged mesh.
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub name: String,
+    pub material: u32,
+    pub first_tri: u32,
+    pub tri_count: u32,
+    pub reflector: bool,
+    pub receiver: bool,
+    /// "plane", "ring", or the mesh file as written in the scene.
+    pub source: String,
+}
+
+/// All triangles of the scene in world space.
+#[derive(Clone, Debug, Default)]
+pub struct SceneMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+    /// Object index of each triangle.
+    pub tri_object: Vec<u32>,
+}
+
+impl SceneMesh {
+    /// Corner positions of triangle `t`.
+    #[inline]
+    pub fn tri(&self, t: u32) -> [Vec3; 3] {
+        self.indices[t as usize].map(|i| self.positions[i as usize])
+    }
+
+    /// Unnormalised geometric normal (twice the area) of triangle `t`, following the winding.
+    #[inline]
+    pub fn tri_cross(&self, t: u32) -> Vec3 {
+        let [a, b, c] = self.tri(t);
+        (b - a).cross(c - a)
+    }
+
+    /// Interpolated shading normal (unit) at barycentrics (u, v).
+    #[inline]
+    pub fn shading_normal(&self, t: u32, u: f32, v: f32) -> Vec3 {
+        let [i0, i1, i2] = self.indices[t as usize];
+        let n = self.normals[i0 as usize] * (1.0 - u - v)
+            + self.normals[i1 as usize] * u
+            + self.normals[i2 as usize] * v;
+        n.try_normalize()
+            .unwrap_or_else(|| self.tri_cross(t).normalize_or_zero())
+    }
+
+    /// Point at barycentrics (u, v).
+    #[inline]
+    pub fn point(&self, t: u32, u: f32, v: f32) -> Vec3 {
+        let [a, b, c] = self.tri(t);
+        a * (1.0 - u - v) + b * u + c * v
+    }
+
+    /// Axis-aligned bounds (min, max); zero box for an empty mesh.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        if self.positions.is_empty() {
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in &self.indices {
+            for &i in t {
+                lo = lo.min(self.positions[i as usize]);
+                hi = hi.max(self.positions[i as usize]);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+/// The render defaults of the scene file.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderSettings {
+    pub spp: u32,
+    pub seed: u64,
+    pub reference: ReferenceSpec,
+}
+
+/// A loaded, validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    /// The scene file.
+    pub path: PathBuf,
+    pub camera: Camera,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub objects: Vec<Object>,
+    pub mesh: SceneMesh,
+    pub settings: RenderSettings,
+    /// Mesh files the scene reads (so outputs never overwrite them).
+    pub inputs: Vec<PathBuf>,
+    /// Problems that do not stop rendering (repaired normals, removed triangles, ...).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Loads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Scene::from_str_at(&text, path)
+    }
+
+    /// Parses scene text; `path` names the file in messages and anchors relative mesh paths.
+    pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: path.to_path_buf(),
+            message: format!("malformed scene file: {}", e.to_string().trim_end()),
+        })?;
+        Builder::new(path).build(file)
+    }
+
+    /// Material of triangle `t`.
+    #[inline]
+    pub fn tri_material(&self, t: u32) -> &Brdf {
+        let o = self.mesh.tri_object[t as usize] as usize;
+        &self.materials[self.objects[o].material as usize].brdf
+    }
+
+    /// Object of triangle `t`.
+    #[inline]
+    pub fn tri_object(&self, t: u32) -> &Object {
+        &self.objects[self.mesh.tri_object[t as usize] as usize]
+    }
+}
+
+struct Builder {
+    path: PathBuf,
+    dir: PathBuf,
+    warnings: Vec<String>,
+}
+
+impl Builder {
+    fn new(path: &Path) -> Builder {
+        let dir = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        Builder {
+            path: path.to_path_buf(),
+            dir,
+            warnings: Vec::new(),
+        }
+    }
+
+    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            path: self.path.clone(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    fn finite3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(Vec3::from(v))
+        } else {
+            Err(self.err(field, format!("expected finite numbers, got {v:?}")))
+        }
+    }
+
+    fn nonneg3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let x = self.finite3(field, v)?;
+        if x.min_element() < 0.0 {
+            return Err(self.err(field, format!("must not be negative, got {v:?}")));
+        }
+        Ok(x)
+    }
+
+    fn unit3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let x = self.finite3(field, v)?;
+        x.try_normalize()
+            .ok_or_else(|| self.err(field, "must be a non-zero direction"))
+    }
+
+    fn positive(&self, field: &str, x: f32) -> Result<f32, SceneError> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(field, format!("must be a finite number > 0, got {x}")))
+        }
+    }
+
+    fn build(mut self, file: SceneFile) -> Result<Scene, SceneError> {
+        let name = match &file.name {
+            Some(n) if n.trim().is_empty() => return Err(self.err("name", "must not be empty")),
+            Some(n) => n.clone(),
+            None => self
+                .path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into()),
+        };
+        if name.contains(['/', '\\']) || name == "." || name == ".." {
+            return Err(self.err("name", "must not contain path separators"));
+        }
+        let camera = self.camera(&file.camera)?;
+        let lights = file
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| self.light(i, l))
+            .collect::<Result<Vec<_>, _>>()?;
+        if lights.is_empty() {
+            self.warnings
+                .push("no lights: every method will render a black image".into());
+        }
+        let mut materials = Vec::new();
+        for (mname, spec) in &file.materials {
+            let brdf = material_brdf(spec);
+            brdf.validate()
+                .map_err(|m| self.err(format!("materials.{mname}"), m))?;
+            materials.push(Material {
+                name: mname.clone(),
+                brdf,
+            });
+        }
+        if file.objects.is_empty() {
+            return Err(self.err("objects", "the scene has no objects"));
+        }
+        let mut mesh = SceneMesh::default();
+        let mut objects = Vec::new();
+        let mut inputs = Vec::new();
+        for (i, o) in file.objects.iter().enumerate() {
+            let field = format!("objects[{i}]");
+            let oname = o.name.clone().unwrap_or_else(|| format!("object{i}"));
+            let material = materials
+                .iter()
+                .position(|m| m.name == o.material)
+                .ok_or_else(|| {
+                    let known: Vec<_> = materials.iter().map(|m| m.name.as_str()).collect();
+                    self.err(
+                        format!("{field}.material"),
+                        format!(
+                            "material \"{}\" is not defined (defined: {})",
+                            o.material,
+                            if known.is_empty() {
+                                "none".to_string()
+                            } else {
+                                known.join(", ")
+                            }
+                        ),
+                    )
+                })? as u32;
+            let (data, source) = self.shape(&field, &oname, &o.shape, &mut inputs)?;
+            let xf = self.transform(&field, &o.transform)?;
+            let first_tri = mesh.indices.len() as u32;
+            append_transformed(&mut mesh, &data, xf, objects.len() as u32);
+            let tri_count = mesh.indices.len() as u32 - first_tri;
+            objects.push(Object {
+                name: oname,
+                material,
+                first_tri,
+                tri_count,
+                reflector: o.reflector,
+                receiver: o.receiver,
+                source,
+            });
+        }
+        let render = &file.render;
+        if render.spp == 0 || render.spp > MAX_SPP {
+            return Err(self.err(
+                "render.spp",
+                format!("must be between 1 and {MAX_SPP}, got {}", render.spp),
+            ));
+        }
+        let r = file.methods.reference;
+        for (f, v) in [
+            ("methods.reference.reflector_samples", r.reflector_samples),
+            ("methods.reference.bsdf_samples", r.bsdf_samples),
+        ] {
+            if v > 64 {
+                return Err(self.err(f, format!("must be between 0 and 64, got {v}")));
+            }
+        }
+        if r.reflector_samples == 0 && r.bsdf_samples == 0 {
+            return Err(self.err(
+                "methods.reference",
+                "reflector_samples and bsdf_samples cannot both be 0",
+            ));
+        }
+        Ok(Scene {
+            name,
+            path: self.path.clone(),
+            camera,
+            lights,
+            materials,
+            objects,
+            mesh,
+            settings: RenderSettings {
+                spp: render.spp,
+                seed: render.seed,
+                reference: r,
+            },
+            inputs,
+            warnings: self.warnings,
+        })
+    }
+
+    fn camera(&self, c: &CameraSpec) -> Result<Camera, SceneError> {
+        let pos = self.finite3("camera.position", c.position)?;
+        let at = self.finite3("camera.look_at", c.look_at)?;
+        let up = self.unit3("camera.up", c.up)?;
+        if !(c.fov_y.is_finite() && c.fov_y > 0.0 && c.fov_y < 180.0) {
+            return Err(self.err(
+                "camera.fov_y",
+                format!("must be in (0, 180) degrees, got {}", c.fov_y),
+            ));
+        }
+        for (f, v) in [("camera.width", c.width), ("camera.height", c.height)] {
+            if v == 0 || v > MAX_IMAGE_SIDE {
+                return Err(self.err(
+                    f,
+                    format!("must be between 1 and {MAX_IMAGE_SIDE}, got {v}"),
+                ));
+            }
+        }
+        if (at - pos).length() == 0.0 {
+            return Err(self.err("camera.look_at", "equals camera.position"));
+        }
+        Camera::look_at(pos, at, up, c.fov_y, c.width, c.height)
+            .ok_or_else(|| self.err("camera.up", "is parallel to the viewing direction"))
+    }
+
+    fn light(&self, i: usize, l: &LightSpec) -> Result<Light, SceneError> {
+        let f = |s: &str| format!("lights[{i}].{s}");
+        Ok(match l {
+            LightSpec::Point {
+                position,
+                intensity,
+            } => Light::Point {
+                position: self.finite3(&f("position"), *position)?,
+                intensity: self.nonneg3(&f("intensity"), *intensity)?,
+            },
+            LightSpec::Spot {
+                position,
+                direction,
+                intensity,
+                cone_angle,
+                falloff_angle,
+            } => {
+                if !(cone_angle.is_finite() && *cone_angle > 0.0 && *cone_angle <= 180.0) {
+                    return Err(self.err(
+                        f("cone_angle"),
+                        format!("must be in (0, 180] degrees, got {cone_angle}"),
+                    ));
+                }
+                let fall = falloff_angle.unwrap_or(*cone_angle);
+                if !(fall.is_finite() && fall >= 0.0 && fall <= *cone_angle) {
+                    return Err(self.err(
+                        f("falloff_angle"),
+                        format!("must be in [0, cone_angle = {cone_angle}] degrees, got {fall}"),
+                    ));
+                }
+                Light::Spot {
+                    position: self.finite3(&f("position"), *position)?,
+                    direction: self.unit3(&f("direction"), *direction)?,
+                    intensity: self.nonneg3(&f("intensity"), *intensity)?,
+                    cos_cone: cone_angle.to_radians().cos(),
+                    cos_falloff: fall.to_radians().cos(),
+                }
+            }
+            LightSpec::Directional {
+                direction,
+                irradiance,
+            } => Light::Directional {
+                direction: self.unit3(&f("direction"), *direction)?,
+                irradiance: self.nonneg3(&f("irradiance"), *irradiance)?,
+            },
+        })
+    }
+
+    fn shape(
+        &mut self,
+        field: &str,
+        oname: &str,
+        s: &ShapeSpec,
+        inputs: &mut Vec<PathBuf>,
+    ) -> Result<(MeshData, String), SceneError> {
+        let sf = |x: &str| format!("{field}.shape.{x}");
+        Ok(match s {
+            ShapeSpec::Mesh { file } => {
+                let p = self.dir.join(file);
+                let data = mesh::load_mesh(&p).map_err(|source| SceneError::Mesh {
+                    path: self.path.clone(),
+                    field: sf("file"),
+                    source,
+                })?;
+                let label = format!("{field} \"{oname}\" ({file})");
+                let (data, report) =
+                    mesh::clean_mesh(data, &label).map_err(|source| SceneError::Mesh {
+                        path: self.path.clone(),
+                        field: sf("file"),
+                        source,
+                    })?;
+                self.warnings.extend(report.warnings);
+                inputs.push(p);
+                (data, file.clone())
+            }
+            ShapeSpec::Plane { size, subdivisions } => {
+                self.positive(&sf("size[0]"), size[0])?;
+                self.positive(&sf("size[1]"), size[1])?;
+                self.count(&sf("subdivisions"), *subdivisions, 1, MAX_SUBDIVISIONS)?;
+                (shapes::plane(*size, *subdivisions), "plane".into())
+            }
+            ShapeSpec::Box { size } => {
+                for (k, v) in size.iter().enumerate() {
+                    self.positive(&sf(&format!("size[{k}]")), *v)?;
+                }
+                (shapes::cuboid(*size), "box".into())
+            }
+            ShapeSpec::Sphere { radius, segments } => {
+                self.positive(&sf("radius"), *radius)?;
+                self.count(&sf("segments"), *segments, 3, MAX_SEGMENTS)?;
+                (shapes::sphere(*radius, *segments), "sphere".into())
+            }
+            ShapeSpec::Ring {
+                radius,
+                height,
+                thickness,
+                segments,
+            } => {
+                self.positive(&sf("radius"), *radius)?;
+                self.positive(&sf("height"), *height)?;
+                self.positive(&sf("thickness"), *thickness)?;
+                self.count(&sf("segments"), *segments, 3, MAX_SEGMENTS)?;
+                (
+                    shapes::ring(*radius, *height, *thickness, *segments),
+                    "ring".into(),
+                )
+            }
+        })
+    }
+
+    fn count(&self, field: &str, v: u32, lo: u32, hi: u32) -> Result<u32, SceneError> {
+        if v < lo || v > hi {
+            return Err(self.err(field, format!("must be between {lo} and {hi}, got {v}")));
+        }
+        Ok(v)
+    }
+
+    fn transform(&self, field: &str, t: &TransformSpec) -> Result<Mat4, SceneError> {
+        let translate = match t.translate {
+            Some(v) => self.finite3(&format!("{field}.transform.translate"), v)?,
+            None => Vec3::ZERO,
+        };
+        let rot = match t.rotate {
+            Some(v) => {
+                let r = self.finite3(&format!("{field}.transform.rotate"), v)?;
+                Quat::from_rotation_z(r.z.to_radians())
+                    * Quat::from_rotation_y(r.y.to_radians())
+                    * Quat::from_rotation_x(r.x.to_radians())
+            }
+            None => Quat::IDENTITY,
+        };
+        let sfield = format!("{field}.transform.scale");
+        let scale = match t.scale {
+            None => Vec3::ONE,
+            Some(ScaleSpec::Uniform(s)) => Vec3::splat(s),
+            Some(ScaleSpec::PerAxis(v)) => Vec3::from(v),
+        };
+        if !scale.is_finite() || scale.abs().min_element() < 1e-12 {
+            return Err(self.err(sfield, format!("must be finite and non-zero, got {scale}")));
+        }
+        Ok(Mat4::from_scale_rotation_translation(
+            scale, rot, translate,
+        ))
+    }
+}
+
+fn rgb(v: [f32; 3]) -> Vec3 {
+    Vec3::from(v)
+}
+
+/// The exact BRDF of a material spec (validated by the caller).
+pub fn material_brdf(spec: &MaterialSpec) -> Brdf {
+    match *spec {
+        MaterialSpec::Lambert { diffuse } => Brdf::Lambert {
+            diffuse: rgb(diffuse),
+        },
+        MaterialSpec::Phong {
+            diffuse,
+            specular,
+            exponent,
+        } => Brdf::Phong {
+            diffuse: rgb(diffuse),
+            specular: rgb(specular),
+            exponent,
+        },
+        MaterialSpec::BlinnPhong {
+            diffuse,
+            specular,
+            exponent,
+        } => Brdf::BlinnPhong {
+            diffuse: rgb(diffuse),
+            specular: rgb(specular),
+            exponent,
+        },
+        MaterialSpec::Ward {
+            diffuse,
+            specular,
+            roughness,
+        } => Brdf::Ward {
+            diffuse: rgb(diffuse),
+            specular: rgb(specular),
+            roughness,
+        },
+        MaterialSpec::CookTorrance {
+            diffuse,
+            specular,
+            roughness,
+            distribution,
+        } => Brdf::CookTorrance {
+            diffuse: rgb(diffuse),
+            specular: rgb(specular),
+            roughness,
+            distribution: match distribution {
+                DistributionSpec::Beckmann => Distribution::Beckmann,
+                DistributionSpec::Ggx => Distribution::Ggx,
+            },
+        },
+    }
+}
+
+/// Appends `data` transformed by `xf` (normals by the inverse transpose; winding flipped for
+/// mirroring transforms so that it keeps agreeing with the normals).
+fn append_transformed(mesh: &mut SceneMesh, data: &MeshData, xf: Mat4, object: u32) {
+    let base = mesh.positions.len() as u32;
+    let nmat = Mat3::from_mat4(xf).inverse().transpose();
+    let mirror = Mat3::from_mat4(xf).determinant() < 0.0;
+    mesh.positions
+        .extend(data.positions.iter().map(|p| xf.transform_point3(*p)));
+    match &data.normals {
+        Some(ns) => mesh
+            .normals
+            .extend(ns.iter().map(|n| (nmat * *n).normalize_or_zero())),
+        None => mesh
+            .normals
+            .extend(std::iter::repeat_n(Vec3::ZERO, data.positions.len())),
+    }
+    for t in &data.indices {
+        let t = if mirror { [t[0], t[2], t[1]] } else { *t };
+        mesh.indices.push(t.map(|i| i + base));
+        mesh.tri_object.push(object);
+    }
+}

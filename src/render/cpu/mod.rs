@@ -1,1 +1,8 @@
-//! CPU renderers (rayon).
+//! CPU renderers (rayon): the path-traced reference (direct light + exactly one indirect bounce)
+//! and direct light only.
+
+pub mod reference;
+pub mod reflectors;
+pub mod surface;
+
+pub use reference::{Progress, RenderOptions, RenderStats, render};

@@ -1,0 +1,84 @@
+//! `interreflect info`.
+
+use interreflect::scene::{Light, Scene};
+use std::path::Path;
+
+pub fn run(path: &Path) -> anyhow::Result<i32> {
+    let scene = Scene::load(path)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let c = &scene.camera;
+    println!("scene {} ({})", scene.name, scene.path.display());
+    println!(
+        "camera: position {:?}, forward {:?}, vertical fov {:.1}°, {}x{}",
+        c.position.to_array(),
+        c.forward.to_array(),
+        c.fov_y.to_degrees(),
+        c.width,
+        c.height
+    );
+    println!("objects ({} triangles in all):", scene.mesh.indices.len());
+    for o in &scene.objects {
+        let tris = &scene.mesh.indices[o.first_tri as usize..(o.first_tri + o.tri_count) as usize];
+        let mut lo = glam::Vec3::splat(f32::INFINITY);
+        let mut hi = glam::Vec3::splat(f32::NEG_INFINITY);
+        let mut area = 0.0f64;
+        for (k, t) in tris.iter().enumerate() {
+            for &i in t {
+                lo = lo.min(scene.mesh.positions[i as usize]);
+                hi = hi.max(scene.mesh.positions[i as usize]);
+            }
+            area += 0.5 * scene.mesh.tri_cross(o.first_tri + k as u32).length() as f64;
+        }
+        println!(
+            "  {:<12} {:>9} triangles  area {:>9.4}  bounds {:?} .. {:?}  material {}  {}{}  [{}]",
+            o.name,
+            o.tri_count,
+            area,
+            lo.to_array(),
+            hi.to_array(),
+            scene.materials[o.material as usize].name,
+            if o.reflector { "reflector " } else { "" },
+            if o.receiver { "receiver" } else { "" },
+            o.source
+        );
+    }
+    let (lo, hi) = scene.mesh.bounds();
+    println!("scene bounds: {:?} .. {:?}", lo.to_array(), hi.to_array());
+    println!("lights:");
+    for (i, l) in scene.lights.iter().enumerate() {
+        match l {
+            Light::Point { position, intensity } => println!(
+                "  [{i}] point at {:?}, intensity {:?} W/sr",
+                position.to_array(),
+                intensity.to_array()
+            ),
+            Light::Spot { position, direction, intensity, cos_cone, cos_falloff } => println!(
+                "  [{i}] spot at {:?} towards {:?}, intensity {:?} W/sr, cone {:.1}°, falloff from {:.1}°",
+                position.to_array(),
+                direction.to_array(),
+                intensity.to_array(),
+                cos_cone.acos().to_degrees(),
+                cos_falloff.acos().to_degrees()
+            ),
+            Light::Directional { direction, irradiance } => println!(
+                "  [{i}] directional along {:?}, irradiance {:?} W/m²",
+                direction.to_array(),
+                irradiance.to_array()
+            ),
+        }
+    }
+    println!("materials:");
+    for m in &scene.materials {
+        println!("  {:<12} {:?}", m.name, m.brdf);
+    }
+    println!(
+        "render defaults: spp {}, seed {}; reference: {} reflector sample(s) + {} BRDF sample(s) per path",
+        scene.settings.spp,
+        scene.settings.seed,
+        scene.settings.reference.reflector_samples,
+        scene.settings.reference.bsdf_samples
+    );
+    Ok(0)
+}

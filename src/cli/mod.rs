@@ -1,0 +1,55 @@
+//! Command-line interface (clap). Exit codes: 0 success, 1 a `compare --fail-above` threshold
+//! was exceeded, 2 any error (bad input, I/O), 130 interrupted.
+
+mod compare;
+mod info;
+mod progress;
+mod render;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "interreflect",
+    version,
+    about = "Glossy one-bounce interreflections with spherical Gaussians, and the path-traced reference they are measured against"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to OUT.exr (linear) and OUT.png (tonemapped) beside it.
+    Render(render::RenderArgs),
+    /// Compare a test image with a reference: RMSE, rel_rmse, relMSE, SSIM, FLIP.
+    Compare(compare::CompareArgs),
+    /// Describe a scene: triangles per object, bounds, lights, materials.
+    Info {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+    /// Convert a mesh (PLY, PLY.gz, OBJ, glTF/GLB) to the compact binary PLY.gz used in scenes/.
+    ConvertMesh {
+        input: PathBuf,
+        output: PathBuf,
+    },
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<i32> {
+    match cli.command {
+        Command::Render(a) => render::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::Info { scene } => info::run(&scene),
+        Command::ConvertMesh { input, output } => {
+            let report = interreflect::scene::mesh::convert(&input, &output)?;
+            for w in &report.warnings {
+                eprintln!("warning: {w}");
+            }
+            eprintln!("wrote {}", output.display());
+            Ok(0)
+        }
+    }
+}

@@ -1,0 +1,265 @@
+//! `interreflect render`.
+
+use super::progress;
+use anyhow::{Context, bail};
+use interreflect::accel::Accel;
+use interreflect::fsutil::same_file;
+use interreflect::image::{Tonemap, write_exr, write_png};
+use interreflect::render::Method;
+use interreflect::render::checks::camera_inside_geometry;
+use interreflect::render::cpu::{Progress, RenderOptions, render};
+use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Rendering method.
+    #[arg(long, value_enum, default_value_t = Method::Reference)]
+    pub method: Method,
+    /// Samples per pixel (default: the scene's render.spp).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Seed of the random streams (default: the scene's render.seed).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Image width (default: the scene's camera.width; height follows the aspect if not given).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the scene's camera.height; width follows the aspect if not given).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Render only the one-bounce indirect light.
+    #[arg(long)]
+    pub indirect_only: bool,
+    /// Output EXR; a PNG and a JSON log are written beside it
+    /// (default: results/renders/<scene>.exr).
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Exposure of the PNG in stops.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// No progress bar and no log lines (errors and warnings still go to stderr).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// The JSON log written beside the image.
+#[derive(Serialize)]
+struct RenderLog<'a> {
+    scene: &'a str,
+    scene_file: String,
+    method: Method,
+    indirect_only: bool,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u64,
+    threads: usize,
+    reflector_samples: u32,
+    bsdf_samples: u32,
+    triangles: usize,
+    tonemap: String,
+    seconds: Timings,
+    paths: u64,
+    rays: u64,
+    paths_per_second: f64,
+    rays_per_second: f64,
+    nonfinite_samples: u64,
+}
+
+#[derive(Serialize, Clone, Copy, Default)]
+struct Timings {
+    load: f64,
+    bvh: f64,
+    render: f64,
+    write: f64,
+    total: f64,
+}
+
+fn resolve_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> {
+    let (cw, ch) = (scene.camera.width, scene.camera.height);
+    let (w, h) = match (args.width, args.height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, ((w as u64 * ch as u64 + cw as u64 / 2) / cw as u64).max(1) as u32),
+        (None, Some(h)) => (((h as u64 * cw as u64 + ch as u64 / 2) / ch as u64).max(1) as u32, h),
+        (None, None) => (cw, ch),
+    };
+    for (name, v) in [("--width", w), ("--height", h)] {
+        if v == 0 || v > MAX_IMAGE_SIDE {
+            bail!("{name} must be between 1 and {MAX_IMAGE_SIDE}, got {v}");
+        }
+    }
+    Ok((w, h))
+}
+
+/// Output EXR path, checked: ends in .exr and overwrites no input.
+fn output_path(args: &RenderArgs, scene: &Scene) -> anyhow::Result<PathBuf> {
+    let out = args
+        .output
+        .clone()
+        .unwrap_or_else(|| Path::new("results/renders").join(format!("{}.exr", scene.name)));
+    if out.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("exr")) != Some(true) {
+        bail!("--output {}: the output must be an .exr file (a .png is written beside it)", out.display());
+    }
+    let png = out.with_extension("png");
+    let json = out.with_extension("json");
+    for input in std::iter::once(&scene.path).chain(scene.inputs.iter()) {
+        for o in [&out, &png, &json] {
+            if same_file(o, input) {
+                bail!("refusing to overwrite the input {} with an output", input.display());
+            }
+        }
+    }
+    Ok(out)
+}
+
+pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
+    let t0 = Instant::now();
+    let mut times = Timings::default();
+    if args.method == Method::Direct && args.indirect_only {
+        bail!("--indirect-only with --method direct would render nothing: direct renders direct light only");
+    }
+    if let Some(0) = args.threads {
+        bail!("--threads must be at least 1");
+    }
+    let scene = Scene::load(&args.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let spp = args.spp.unwrap_or(scene.settings.spp);
+    if spp == 0 || spp > MAX_SPP {
+        bail!("--spp must be between 1 and {MAX_SPP}, got {spp}");
+    }
+    let seed = args.seed.unwrap_or(scene.settings.seed);
+    let (width, height) = resolve_size(&args, &scene)?;
+    let out = output_path(&args, &scene)?;
+    times.load = t0.elapsed().as_secs_f64();
+
+    let pool = {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(n) = args.threads {
+            b = b.num_threads(n);
+        }
+        b.build().context("cannot start the worker threads")?
+    };
+    let threads = pool.current_num_threads();
+    let log = |s: String| {
+        if !args.quiet {
+            eprintln!("{s}");
+        }
+    };
+    log(format!(
+        "scene {}: {} triangles in {} objects, {} lights; {:?}{} {}x{} at {} spp, seed {}, {} threads",
+        scene.name,
+        scene.mesh.indices.len(),
+        scene.objects.len(),
+        scene.lights.len(),
+        args.method,
+        if args.indirect_only { " (indirect only)" } else { "" },
+        width,
+        height,
+        spp,
+        seed,
+        threads
+    ));
+
+    let t = Instant::now();
+    let accel = pool.install(|| Accel::build(&scene.mesh.positions, &scene.mesh.indices));
+    times.bvh = t.elapsed().as_secs_f64();
+    if let Some(w) = camera_inside_geometry(&scene, &accel) {
+        eprintln!("warning: {}: {w}", scene.path.display());
+    }
+
+    let r = scene.settings.reference;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp,
+        seed,
+        direct: !args.indirect_only,
+        indirect: args.method == Method::Reference,
+        reflector_samples: r.reflector_samples,
+        bsdf_samples: r.bsdf_samples,
+    };
+    let pb = progress::bar(height as u64, "rendering", args.quiet);
+    let cancel = progress::interrupt_flag();
+    let rows_done = |n: u64| pb.inc(n);
+    let prog = Progress {
+        rows_done: &rows_done,
+        cancel,
+    };
+    let t = Instant::now();
+    let result = pool.install(|| render(&scene, &accel, &opts, &prog));
+    pb.finish_and_clear();
+    times.render = t.elapsed().as_secs_f64();
+    let Some((img, stats)) = result else {
+        eprintln!("interrupted: nothing was written");
+        return Ok(130);
+    };
+    if cancel.load(Ordering::SeqCst) {
+        eprintln!("interrupted: nothing was written");
+        return Ok(130);
+    }
+    if stats.nonfinite_samples > 0 {
+        eprintln!(
+            "warning: {} samples were not finite and were dropped",
+            stats.nonfinite_samples
+        );
+    }
+
+    let tm = Tonemap {
+        exposure: args.exposure,
+        ..Tonemap::default()
+    };
+    let t = Instant::now();
+    let png = out.with_extension("png");
+    let json = out.with_extension("json");
+    write_exr(&out, &img)?;
+    write_png(&png, &img, &tm)?;
+    times.write = t.elapsed().as_secs_f64();
+    times.total = t0.elapsed().as_secs_f64();
+    let log_data = RenderLog {
+        scene: &scene.name,
+        scene_file: scene.path.display().to_string(),
+        method: args.method,
+        indirect_only: args.indirect_only,
+        width,
+        height,
+        spp,
+        seed,
+        threads,
+        reflector_samples: r.reflector_samples,
+        bsdf_samples: r.bsdf_samples,
+        triangles: scene.mesh.indices.len(),
+        tonemap: tm.describe(),
+        seconds: times,
+        paths: stats.paths,
+        rays: stats.rays,
+        paths_per_second: stats.paths as f64 / times.render.max(1e-9),
+        rays_per_second: stats.rays as f64 / times.render.max(1e-9),
+        nonfinite_samples: stats.nonfinite_samples,
+    };
+    let text = serde_json::to_string_pretty(&log_data)? + "\n";
+    interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes())
+        .with_context(|| format!("cannot write {}", json.display()))?;
+    log(format!("wrote {} (linear), {} ({})", out.display(), png.display(), tm.describe()));
+    log(format!(
+        "time: load {:.2} s, BVH {:.2} s, render {:.2} s, write {:.2} s, total {:.2} s; {:.2} M paths/s, {:.2} M rays/s",
+        times.load,
+        times.bvh,
+        times.render,
+        times.write,
+        times.total,
+        log_data.paths_per_second / 1e6,
+        log_data.rays_per_second / 1e6
+    ));
+    Ok(0)
+}

@@ -1,0 +1,98 @@
+//! Surface interactions: hit points with their frames, two-sided orientation and the light a
+//! surface point reflects.
+
+use crate::accel::{Accel, Hit};
+use crate::brdf::Brdf;
+use crate::math::Frame;
+use crate::scene::{Light, Scene};
+use glam::Vec3;
+
+/// A point on a surface, oriented towards the side it is seen from.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub p: Vec3,
+    pub tri: u32,
+    /// Unit geometric normal, flipped to the viewing side.
+    pub ng: Vec3,
+    /// Shading frame (interpolated normal, flipped with `ng`).
+    pub frame: Frame,
+}
+
+impl SurfacePoint {
+    /// The hit point of `hit`, oriented so that `ng · towards ≥ 0` (`towards` points away from
+    /// the surface, e.g. to the viewer).
+    pub fn from_hit(scene: &Scene, hit: &Hit, towards: Vec3) -> Option<SurfacePoint> {
+        Self::at(scene, hit.tri, hit.u, hit.v, towards)
+    }
+
+    /// The point at barycentrics (u, v) of triangle `tri`, oriented towards `towards`.
+    pub fn at(scene: &Scene, tri: u32, u: f32, v: f32, towards: Vec3) -> Option<SurfacePoint> {
+        let mesh = &scene.mesh;
+        let mut ng = mesh.tri_cross(tri).try_normalize()?;
+        let mut ns = mesh.shading_normal(tri, u, v);
+        if ng.dot(towards) < 0.0 {
+            ng = -ng;
+            ns = -ns;
+        }
+        // A shading normal that points into the surface (bad input that survived cleaning)
+        // falls back to the geometric normal.
+        if ns.dot(ng) <= 0.0 {
+            ns = ng;
+        }
+        Some(SurfacePoint {
+            p: mesh.point(tri, u, v),
+            tri,
+            ng,
+            frame: Frame::from_normal(ns),
+        })
+    }
+
+    /// Ray origin offset off the surface on the oriented side.
+    #[inline]
+    pub fn offset(&self, eps: f32) -> Vec3 {
+        self.p + self.ng * eps
+    }
+}
+
+/// Scene-wide ray epsilon: 1e-5 of the bounding-box diagonal (at least 1e-6).
+pub fn ray_epsilon(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.mesh.bounds();
+    ((hi - lo).length() * 1e-5).max(1e-6)
+}
+
+/// Radiance that the light `light` reflects at `sp` towards the unit direction `w_out` (which
+/// must point to the side `sp` is oriented to), with exact light visibility:
+/// f(w_out, ω_l) · cos θ_l · E_l · V(l, p).
+pub fn reflected_light(
+    accel: &Accel,
+    brdf: &Brdf,
+    sp: &SurfacePoint,
+    w_out: Vec3,
+    light: &Light,
+    eps: f32,
+) -> Vec3 {
+    let Some(inc) = light.incident(sp.p) else {
+        return Vec3::ZERO;
+    };
+    if sp.ng.dot(inc.wi) <= 0.0 || sp.ng.dot(w_out) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let wi_l = sp.frame.to_local(inc.wi);
+    let wo_l = sp.frame.to_local(w_out);
+    if wi_l.z <= 0.0 || wo_l.z <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let f = brdf.eval(wo_l, wi_l);
+    if f == Vec3::ZERO || inc.irradiance == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let tmax = if inc.dist.is_finite() {
+        inc.dist * (1.0 - 1e-5) - eps
+    } else {
+        f32::INFINITY
+    };
+    if !accel.unoccluded(sp.offset(eps), inc.wi, 0.0, tmax) {
+        return Vec3::ZERO;
+    }
+    f * wi_l.z * inc.irradiance
+}

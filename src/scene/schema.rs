@@ -1,0 +1,238 @@
+//! The scene-file schema (TOML, serde). Field-by-field documentation: `docs/scene-format.md`.
+//!
+//! Every table rejects unknown fields, so a typo is an error that names the field, not a silently
+//! ignored setting.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Scene name (default: the file stem); used for default output names.
+    pub name: Option<String>,
+    pub camera: CameraSpec,
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialSpec>,
+    #[serde(default)]
+    pub objects: Vec<ObjectSpec>,
+    #[serde(default)]
+    pub render: RenderSpec,
+    #[serde(default)]
+    pub methods: MethodsSpec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    /// Vertical field of view in degrees.
+    pub fov_y: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LightSpec {
+    /// Isotropic point light; `intensity` in W/sr per RGB channel.
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    /// Spot light: `intensity` (W/sr) on the axis, full inside `falloff_angle`, smoothly down to 0
+    /// at `cone_angle` (half-angles in degrees).
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        intensity: [f32; 3],
+        cone_angle: f32,
+        #[serde(default)]
+        falloff_angle: Option<f32>,
+    },
+    /// Distant light travelling along `direction`; `irradiance` in W/m² on a surface facing it.
+    Directional {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MaterialSpec {
+    Lambert {
+        diffuse: [f32; 3],
+    },
+    Phong {
+        #[serde(default)]
+        diffuse: [f32; 3],
+        specular: [f32; 3],
+        exponent: f32,
+    },
+    BlinnPhong {
+        #[serde(default)]
+        diffuse: [f32; 3],
+        specular: [f32; 3],
+        exponent: f32,
+    },
+    Ward {
+        #[serde(default)]
+        diffuse: [f32; 3],
+        specular: [f32; 3],
+        roughness: f32,
+    },
+    CookTorrance {
+        #[serde(default)]
+        diffuse: [f32; 3],
+        specular: [f32; 3],
+        roughness: f32,
+        distribution: DistributionSpec,
+    },
+}
+
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+pub enum DistributionSpec {
+    Beckmann,
+    Ggx,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    pub name: Option<String>,
+    pub material: String,
+    pub shape: ShapeSpec,
+    #[serde(default)]
+    pub transform: TransformSpec,
+    /// Whether the object reflects light onto others (one-bounce sources).
+    #[serde(default = "yes")]
+    pub reflector: bool,
+    /// Whether the object receives reflected light.
+    #[serde(default = "yes")]
+    pub receiver: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShapeSpec {
+    /// A mesh file, relative to the scene file.
+    Mesh { file: String },
+    /// Square grid in the xz-plane centred at the origin, normal +y.
+    Plane {
+        size: [f32; 2],
+        #[serde(default = "one")]
+        subdivisions: u32,
+    },
+    /// Axis-aligned box centred at the origin.
+    Box { size: [f32; 3] },
+    /// UV sphere centred at the origin.
+    Sphere {
+        radius: f32,
+        #[serde(default = "sphere_segments")]
+        segments: u32,
+    },
+    /// Cylindrical band around +y from y = 0 to `height`, inner radius `radius`, wall `thickness`.
+    Ring {
+        radius: f32,
+        height: f32,
+        thickness: f32,
+        #[serde(default = "ring_segments")]
+        segments: u32,
+    },
+}
+
+fn one() -> u32 {
+    1
+}
+fn sphere_segments() -> u32 {
+    64
+}
+fn ring_segments() -> u32 {
+    256
+}
+
+/// Scale, then rotate (degrees about x, then y, then z), then translate.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct TransformSpec {
+    #[serde(default)]
+    pub translate: Option<[f32; 3]>,
+    #[serde(default)]
+    pub rotate: Option<[f32; 3]>,
+    #[serde(default)]
+    pub scale: Option<ScaleSpec>,
+}
+
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(untagged)]
+pub enum ScaleSpec {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+/// Defaults for `render` (command-line flags override them).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSpec {
+    #[serde(default = "default_spp")]
+    pub spp: u32,
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn default_spp() -> u32 {
+    64
+}
+
+impl Default for RenderSpec {
+    fn default() -> Self {
+        RenderSpec {
+            spp: default_spp(),
+            seed: 0,
+        }
+    }
+}
+
+/// Per-method settings.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MethodsSpec {
+    #[serde(default)]
+    pub reference: ReferenceSpec,
+}
+
+/// Settings of the path-traced reference.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceSpec {
+    /// Reflector points sampled from the lights per camera sample (light-side strategy).
+    #[serde(default = "one")]
+    pub reflector_samples: u32,
+    /// Directions sampled from the receiver's BRDF per camera sample.
+    #[serde(default = "one")]
+    pub bsdf_samples: u32,
+}
+
+impl Default for ReferenceSpec {
+    fn default() -> Self {
+        ReferenceSpec {
+            reflector_samples: 1,
+            bsdf_samples: 1,
+        }
+    }
+}

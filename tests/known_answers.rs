@@ -1,0 +1,209 @@
+//! Known-answer tests of the reference renderer: closed-form direct light, a numerically
+//! integrated one-bounce configuration, and thread-count independence.
+
+use glam::{DVec3, Vec3};
+use interreflect::accel::Accel;
+use interreflect::image::Image;
+use interreflect::render::cpu::reference::render_quiet;
+use interreflect::render::cpu::RenderOptions;
+use interreflect::scene::Scene;
+use std::f64::consts::PI;
+use std::path::Path;
+
+fn load(text: &str) -> Scene {
+    Scene::from_str_at(text, Path::new("inline.toml")).expect("valid test scene")
+}
+
+fn opts(scene: &Scene, spp: u32, direct: bool, indirect: bool) -> RenderOptions {
+    RenderOptions {
+        width: scene.camera.width,
+        height: scene.camera.height,
+        spp,
+        seed: 1,
+        direct,
+        indirect,
+        reflector_samples: scene.settings.reference.reflector_samples,
+        bsdf_samples: scene.settings.reference.bsdf_samples,
+    }
+}
+
+/// Where the ray through pixel (px, py) meets the plane {p : p·n = c}.
+fn on_plane(scene: &Scene, px: f32, py: f32, n: Vec3, c: f32) -> Vec3 {
+    let cam = &scene.camera;
+    let d = cam.ray_dir(px, py);
+    let t = (c - cam.position.dot(n)) / d.dot(n);
+    cam.position + d * t
+}
+
+const POINT_OVER_PLANE: &str = r#"
+[camera]
+position = [0.0, 3.0, 0.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+fov_y = 60.0
+width = 48
+height = 48
+[[lights]]
+type = "point"
+position = [0.3, 1.0, -0.2]
+intensity = [2.0, 1.0, 0.5]
+[materials.white]
+model = "lambert"
+diffuse = [0.5, 0.5, 0.5]
+[[objects]]
+material = "white"
+shape = { type = "plane", size = [8.0, 8.0] }
+"#;
+
+/// A point light over a Lambertian plane: L = ρ/π · I cos θ / d² exactly. The renderer averages
+/// over each pixel's footprint (box filter), so the tolerance per pixel is the spread of the
+/// closed form over that footprint (plus 1e-5 relative for float round-off).
+#[test]
+fn point_light_over_plane_matches_closed_form() {
+    let scene = load(POINT_OVER_PLANE);
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let (img, _) = render_quiet(&scene, &accel, &opts(&scene, 16, true, false));
+    let light = DVec3::new(0.3, 1.0, -0.2);
+    let intensity = DVec3::new(2.0, 1.0, 0.5);
+    let radiance = |p: Vec3| {
+        let d = light - p.as_dvec3();
+        let d2 = d.length_squared();
+        let cos = d.y / d2.sqrt();
+        0.5 / PI * intensity * cos / d2
+    };
+    let mut checked = 0;
+    for py in 0..img.height {
+        for px in 0..img.width {
+            let centre = radiance(on_plane(&scene, px as f32 + 0.5, py as f32 + 0.5, Vec3::Y, 0.0));
+            let mut lo = DVec3::splat(f64::INFINITY);
+            let mut hi = DVec3::splat(f64::NEG_INFINITY);
+            for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let v = radiance(on_plane(&scene, px as f32 + dx, py as f32 + dy, Vec3::Y, 0.0));
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+            let got = img.get(px, py).as_dvec3();
+            for c in 0..3 {
+                let tol = (hi[c] - lo[c]) + 1e-5 * centre[c];
+                assert!(
+                    (got[c] - centre[c]).abs() <= tol,
+                    "pixel ({px},{py}) channel {c}: got {} expected {} ± {tol}",
+                    got[c],
+                    centre[c]
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 48 * 48);
+}
+
+const TWO_SQUARES: &str = r#"
+[camera]
+position = [3.0, 0.5, 0.5]
+look_at = [0.0, 0.5, 0.5]
+fov_y = 24.0
+width = 40
+height = 40
+[[lights]]
+type = "point"
+position = [0.6, 0.45, 0.5]
+intensity = [1.0, 1.0, 1.0]
+[materials.floor]
+model = "lambert"
+diffuse = [0.8, 0.8, 0.8]
+[materials.wall]
+model = "lambert"
+diffuse = [0.5, 0.5, 0.5]
+# Floor: the unit square x, z in [0, 1] at y = 0 (normal +y).
+[[objects]]
+name = "floor"
+material = "floor"
+shape = { type = "plane", size = [1.0, 1.0] }
+transform = { translate = [0.5, 0.0, 0.5] }
+# Wall: the unit square y, z in [0, 1] at x = 0 (normal +x).
+[[objects]]
+name = "wall"
+material = "wall"
+shape = { type = "plane", size = [1.0, 1.0] }
+transform = { rotate = [0.0, 0.0, -90.0], translate = [0.0, 0.5, 0.5] }
+"#;
+
+/// One bounce between two perpendicular Lambertian unit squares lit by a point light:
+/// L₁(p) = ρ_w/π ∫_floor ρ_f/π · I cos θ_l / d_l² · cos θ_p cos θ_y / r² dA, by midpoint
+/// quadrature in f64 on a 300 × 300 grid.
+fn one_bounce_on_wall(p: DVec3) -> f64 {
+    let n = 300;
+    let light = DVec3::new(0.6, 0.45, 0.5);
+    let h = 1.0 / n as f64;
+    let mut sum = 0.0;
+    for i in 0..n {
+        for k in 0..n {
+            let y = DVec3::new((i as f64 + 0.5) * h, 0.0, (k as f64 + 0.5) * h);
+            let dl = light - y;
+            let dl2 = dl.length_squared();
+            let lr = 0.8 / PI * dl.y / dl2.sqrt() / dl2; // radiance leaving the floor at y
+            let r = p - y;
+            let r2 = r.length_squared();
+            let cos_y = r.y / r2.sqrt();
+            let cos_p = -r.x / r2.sqrt();
+            sum += lr * cos_y * cos_p / r2 * h * h;
+        }
+    }
+    0.5 / PI * sum
+}
+
+#[test]
+fn two_perpendicular_squares_one_bounce_matches_quadrature() {
+    let scene = load(TWO_SQUARES);
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let spp = 64;
+    let (img, _) = render_quiet(&scene, &accel, &opts(&scene, spp, false, true));
+    // Blocks of 6 × 6 pixels on the wall, away from its edges (where the kernel is singular).
+    let mut checked = 0;
+    for (bx, by) in [(8u32, 8u32), (17, 17), (26, 10), (10, 26), (26, 26)] {
+        let mut got = Vec::new();
+        let mut expect = 0.0;
+        for py in by..by + 6 {
+            for px in bx..bx + 6 {
+                let p = on_plane(&scene, px as f32 + 0.5, py as f32 + 0.5, Vec3::X, 0.0);
+                assert!(p.y > 0.1 && p.y < 0.9 && p.z > 0.1 && p.z < 0.9, "block off the wall");
+                expect += one_bounce_on_wall(p.as_dvec3());
+                got.push(img.get(px, py).x as f64);
+            }
+        }
+        let n = got.len() as f64;
+        expect /= n;
+        let mean = got.iter().sum::<f64>() / n;
+        let var = got.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        // Monte Carlo error of the block mean: 4 standard errors (pixel spread includes the
+        // small variation of the true value across the block, which only widens it), plus
+        // 0.5 % for the midpoint quadrature and the pixel-centre approximation.
+        let tol = 4.0 * (var / n).sqrt() + 0.005 * expect;
+        assert!(
+            (mean - expect).abs() <= tol,
+            "block at ({bx},{by}): rendered {mean:.6e}, quadrature {expect:.6e}, tolerance {tol:.3e}"
+        );
+        // The noise must be small enough for the check to mean something.
+        assert!(tol < 0.05 * expect, "tolerance {tol} too loose for {expect}");
+        checked += 1;
+    }
+    assert_eq!(checked, 5);
+}
+
+fn render_with_threads(scene: &Scene, threads: usize) -> Image {
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| render_quiet(scene, &accel, &opts(scene, 4, true, true)).0)
+}
+
+/// Random streams are keyed by (seed, pixel, sample): 1 and 2 threads give identical bits.
+#[test]
+fn reference_is_bit_identical_for_one_and_two_threads() {
+    let scene = load(TWO_SQUARES);
+    let a = render_with_threads(&scene, 1);
+    let b = render_with_threads(&scene, 2);
+    assert!(a.data.iter().any(|p| p.x > 0.0));
+    let bits = |i: &Image| i.data.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert_eq!(bits(&a), bits(&b));
+}
