@@ -1,4 +1,22 @@
 //! Linear RGB image buffers, EXR/PNG I/O and tonemapping.
+//!
+//! - [`read_exr`] / [`write_exr`]: linear float images (OpenEXR via the `exr` crate).
+//! - [`Tonemap`] / [`to_srgb8`]: exposure, a tone operator and the sRGB OETF to 8-bit display
+//!   values.
+//! - [`write_png`] / [`write_png_rgb8`]: 8-bit sRGB PNG output.
+//!
+//! Every file is written atomically through [`crate::fsutil::write_bytes_atomic`].
+//! See `docs/images-and-metrics.md` for the exact conventions.
+
+mod error;
+mod exr_io;
+mod png_io;
+mod tonemap;
+
+pub use error::ImageError;
+pub use exr_io::{read_exr, write_exr};
+pub use png_io::{write_png, write_png_rgb8};
+pub use tonemap::{ToneOperator, Tonemap, srgb_eotf, srgb_oetf, to_srgb8};
 
 use glam::Vec3;
 
@@ -39,4 +57,60 @@ impl Image {
         let s: f64 = self.data.iter().map(|p| (p.x + p.y + p.z) as f64).sum();
         s / (3.0 * self.data.len() as f64)
     }
+
+    /// An image whose pixel `(x, y)` is `f(x, y)`, evaluated in row-major order.
+    pub fn from_fn(width: u32, height: u32, mut f: impl FnMut(u32, u32) -> Vec3) -> Image {
+        let mut data = Vec::with_capacity(width as usize * height as usize);
+        for y in 0..height {
+            for x in 0..width {
+                data.push(f(x, y));
+            }
+        }
+        Image {
+            width,
+            height,
+            data,
+        }
+    }
+
+    /// True when `data` holds exactly `width × height` pixels.
+    pub fn has_consistent_size(&self) -> bool {
+        self.data.len() as u64 == self.width as u64 * self.height as u64
+    }
+
+    /// The first pixel (row-major order) with a NaN or infinite channel, as `(x, y, value)`.
+    pub fn first_non_finite(&self) -> Option<(u32, u32, Vec3)> {
+        let w = self.width.max(1) as usize;
+        self.data
+            .iter()
+            .position(|p| !p.is_finite())
+            .map(|i| ((i % w) as u32, (i / w) as u32, self.data[i]))
+    }
 }
+
+/// Rejects an image that cannot be written to `path`: zero width or height, or a pixel buffer
+/// whose length is not `width × height`.
+pub(crate) fn check_writable(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+    len: usize,
+) -> Result<(), ImageError> {
+    let reason = if width == 0 || height == 0 {
+        format!("image is empty ({width}x{height})")
+    } else if len as u64 != width as u64 * height as u64 {
+        format!(
+            "pixel buffer holds {len} pixels but the image is {width}x{height} = {} pixels",
+            width as u64 * height as u64
+        )
+    } else {
+        return Ok(());
+    };
+    Err(ImageError::InvalidImage {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
+
+#[cfg(test)]
+mod tests;

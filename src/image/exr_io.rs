@@ -1,0 +1,135 @@
+//! OpenEXR input and output (via the `exr` crate).
+
+use std::io::Cursor;
+use std::path::Path;
+
+use exr::prelude::{self as x, ReadChannels, ReadLayers, WritableImage};
+use glam::Vec3;
+
+use super::{Image, ImageError};
+use crate::fsutil::write_bytes_atomic;
+
+/// Reads the first layer of an OpenEXR file that has `R`, `G` and `B` channels, as linear RGB.
+///
+/// - Any sample type (half, float, uint) is converted to `f32`; any compression the `exr` crate
+///   reads is accepted (none, RLE, ZIP, PIZ, PXR24, B44, DWAA/B as supported by `exr`).
+/// - An `A` channel, if present, is ignored (RGB is taken as stored, i.e. premultiplied).
+/// - Mip/rip-mapped files: the largest level is read. The layer's data window becomes the image.
+/// - Decoding is pedantic: truncated or inconsistent files are errors, not partially black images.
+///
+/// Errors: unreadable file ([`ImageError::Read`]), invalid/truncated data
+/// ([`ImageError::ExrDecode`]), no layer with R, G and B ([`ImageError::MissingChannels`], listing
+/// the channels that exist), a NaN or infinite sample ([`ImageError::NonFinitePixel`], naming the
+/// first such pixel in row-major order).
+pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
+    let bytes = std::fs::read(path).map_err(|source| ImageError::Read {
+        path: path.to_path_buf(),
+        format: "EXR",
+        source,
+    })?;
+    let decode_err = |e: exr::error::Error| ImageError::ExrDecode {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    };
+
+    // Check the channels first so that a file without RGB gets a message listing what it has.
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes[..]), true)
+        .map_err(decode_err)?;
+    let has_rgb = meta.headers.iter().any(|h| {
+        let has = |n: &str| h.channels.list.iter().any(|c| c.name.eq(n));
+        has("R") && has("G") && has("B")
+    });
+    if !has_rgb {
+        let found: Vec<String> = meta
+            .headers
+            .iter()
+            .flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string()))
+            .collect();
+        return Err(ImageError::MissingChannels {
+            path: path.to_path_buf(),
+            found: if found.is_empty() {
+                "none".to_string()
+            } else {
+                found.join(", ")
+            },
+        });
+    }
+
+    let image = x::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size: x::Vec2<usize>, _| (size.width(), vec![Vec3::ZERO; size.area()]),
+            |(w, px): &mut (usize, Vec<Vec3>), pos: x::Vec2<usize>, (r, g, b): (f32, f32, f32)| {
+                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .pedantic()
+        .from_buffered(Cursor::new(&bytes[..]))
+        .map_err(decode_err)?;
+
+    let size = image.layer_data.size;
+    let (width, height) = (size.width(), size.height());
+    let (w32, h32) = match (u32::try_from(width), u32::try_from(height)) {
+        (Ok(w), Ok(h)) => (w, h),
+        _ => {
+            return Err(ImageError::ExrDecode {
+                path: path.to_path_buf(),
+                reason: format!("image size {width}x{height} is too large"),
+            });
+        }
+    };
+    let img = Image {
+        width: w32,
+        height: h32,
+        data: image.layer_data.channel_data.pixels.1,
+    };
+    if let Some((px, py, v)) = img.first_non_finite() {
+        return Err(ImageError::non_finite(path, px, py, v));
+    }
+    Ok(img)
+}
+
+/// Writes `img` as a single-layer OpenEXR file: channels R, G, B as 32-bit float (linear, no
+/// alpha), ZIP compression in blocks of 16 scan lines (lossless), increasing line order.
+/// The file is written atomically (temporary file + rename).
+///
+/// Refuses (with [`ImageError::InvalidImage`] / [`ImageError::NonFinitePixel`]) an empty image,
+/// a buffer whose length is not `width × height`, and NaN/infinite pixels, so every file written
+/// here can be read back by [`read_exr`] bit-exactly.
+pub fn write_exr(path: &Path, img: &Image) -> Result<(), ImageError> {
+    super::check_writable(path, img.width, img.height, img.data.len())?;
+    if let Some((px, py, v)) = img.first_non_finite() {
+        return Err(ImageError::non_finite(path, px, py, v));
+    }
+    let w = img.width as usize;
+    let data = &img.data;
+    let channels = x::SpecificChannels::rgb(|pos: x::Vec2<usize>| {
+        let p = data[pos.y() * w + pos.x()];
+        (p.x, p.y, p.z)
+    });
+    let exr_image = x::Image::from_encoded_channels(
+        (w, img.height as usize),
+        x::Encoding {
+            compression: x::Compression::ZIP16,
+            blocks: x::Blocks::ScanLines,
+            line_order: x::LineOrder::Increasing,
+        },
+        channels,
+    );
+    let mut bytes = Vec::new();
+    exr_image
+        .write()
+        .to_buffered(Cursor::new(&mut bytes))
+        .map_err(|e| ImageError::Encode {
+            path: path.to_path_buf(),
+            format: "OpenEXR",
+            reason: e.to_string(),
+        })?;
+    write_bytes_atomic(path, &bytes).map_err(|source| ImageError::Write {
+        path: path.to_path_buf(),
+        source,
+    })
+}
