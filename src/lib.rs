@@ -19,6 +19,8 @@
 //! - [`compare`]: error metrics and false-colour error maps.
 //! - [`fsutil`]: atomic output files.
 #![forbid(unsafe_code)]
+// `!(x > 0.0)` is written on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
 pub mod brdf;

@@ -72,7 +72,10 @@ fn assert_rejected(case: &Case, scene: &Path, needles: &[&str]) {
     for n in needles {
         assert!(err.contains(n), "message lacks {n:?}:\n{err}");
     }
-    assert!(!case.out().exists(), "an output was written despite the error");
+    assert!(
+        !case.out().exists(),
+        "an output was written despite the error"
+    );
     let leftovers: Vec<_> = std::fs::read_dir(case.dir.path())
         .unwrap()
         .filter_map(|e| e.ok())
@@ -88,7 +91,10 @@ fn scene_with(case: &Case, body: &str) -> PathBuf {
 #[test]
 fn malformed_toml_reports_line_and_column() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{GOOD_HEAD}\n[[objects]\nmaterial = \"white\"\n"));
+    let s = scene_with(
+        &c,
+        &format!("{GOOD_HEAD}\n[[objects]\nmaterial = \"white\"\n"),
+    );
     assert_rejected(&c, &s, &["scene.toml", "line 19", "column"]);
 }
 
@@ -102,77 +108,129 @@ fn unknown_field_is_named() {
 #[test]
 fn unknown_field_in_nested_table_is_named() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("fov_y", "fovy")));
+    let s = scene_with(
+        &c,
+        &format!("{}{PLANE}", GOOD_HEAD.replace("fov_y", "fovy")),
+    );
     assert_rejected(&c, &s, &["scene.toml", "fovy"]);
 }
 
 #[test]
 fn missing_field_is_named() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("fov_y = 40.0", "")));
+    let s = scene_with(
+        &c,
+        &format!("{}{PLANE}", GOOD_HEAD.replace("fov_y = 40.0", "")),
+    );
     assert_rejected(&c, &s, &["scene.toml", "fov_y"]);
 }
 
 #[test]
 fn wrong_type_is_reported() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("width = 16", "width = \"wide\"")));
+    let s = scene_with(
+        &c,
+        &format!(
+            "{}{PLANE}",
+            GOOD_HEAD.replace("width = 16", "width = \"wide\"")
+        ),
+    );
     assert_rejected(&c, &s, &["scene.toml", "line 6"]);
 }
 
 #[test]
 fn negative_intensity_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("[5.0, 5.0, 5.0]", "[-5.0, 5.0, 5.0]")));
+    let s = scene_with(
+        &c,
+        &format!(
+            "{}{PLANE}",
+            GOOD_HEAD.replace("[5.0, 5.0, 5.0]", "[-5.0, 5.0, 5.0]")
+        ),
+    );
     assert_rejected(&c, &s, &["scene.toml", "lights[0].intensity", "negative"]);
 }
 
 #[test]
 fn nan_parameter_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("position = [0.0, 3.0, 0.0]", "position = [0.0, nan, 0.0]")));
+    let s = scene_with(
+        &c,
+        &format!(
+            "{}{PLANE}",
+            GOOD_HEAD.replace("position = [0.0, 3.0, 0.0]", "position = [0.0, nan, 0.0]")
+        ),
+    );
     assert_rejected(&c, &s, &["scene.toml", "lights[0].position", "finite"]);
 }
 
 #[test]
 fn nan_material_parameter_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("[0.5, 0.5, 0.5]", "[0.5, nan, 0.5]")));
+    let s = scene_with(
+        &c,
+        &format!(
+            "{}{PLANE}",
+            GOOD_HEAD.replace("[0.5, 0.5, 0.5]", "[0.5, nan, 0.5]")
+        ),
+    );
     assert_rejected(&c, &s, &["scene.toml", "materials.white"]);
 }
 
 #[test]
 fn absurd_fov_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("fov_y = 40.0", "fov_y = 400.0")));
+    let s = scene_with(
+        &c,
+        &format!(
+            "{}{PLANE}",
+            GOOD_HEAD.replace("fov_y = 40.0", "fov_y = 400.0")
+        ),
+    );
     assert_rejected(&c, &s, &["scene.toml", "camera.fov_y"]);
 }
 
 #[test]
 fn zero_resolution_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{}{PLANE}", GOOD_HEAD.replace("height = 12", "height = 0")));
+    let s = scene_with(
+        &c,
+        &format!("{}{PLANE}", GOOD_HEAD.replace("height = 12", "height = 0")),
+    );
     assert_rejected(&c, &s, &["scene.toml", "camera.height"]);
 }
 
 #[test]
 fn undefined_material_is_named() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{GOOD_HEAD}{}", PLANE.replace("\"white\"", "\"whte\"")));
-    assert_rejected(&c, &s, &["scene.toml", "objects[0].material", "whte", "white"]);
+    let s = scene_with(
+        &c,
+        &format!("{GOOD_HEAD}{}", PLANE.replace("\"white\"", "\"whte\"")),
+    );
+    assert_rejected(
+        &c,
+        &s,
+        &["scene.toml", "objects[0].material", "whte", "white"],
+    );
 }
 
 #[test]
 fn negative_shape_size_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{GOOD_HEAD}{}", PLANE.replace("[4.0, 4.0]", "[4.0, -4.0]")));
+    let s = scene_with(
+        &c,
+        &format!("{GOOD_HEAD}{}", PLANE.replace("[4.0, 4.0]", "[4.0, -4.0]")),
+    );
     assert_rejected(&c, &s, &["scene.toml", "objects[0].shape.size[1]"]);
 }
 
 #[test]
 fn zero_scale_is_rejected() {
     let c = Case::new();
-    let s = scene_with(&c, &format!("{GOOD_HEAD}{PLANE}transform = {{ scale = 0.0 }}\n"));
+    let s = scene_with(
+        &c,
+        &format!("{GOOD_HEAD}{PLANE}transform = {{ scale = 0.0 }}\n"),
+    );
     assert_rejected(&c, &s, &["scene.toml", "objects[0].transform.scale"]);
 }
 
@@ -186,13 +244,19 @@ fn no_objects_is_rejected() {
 #[test]
 fn missing_scene_file_is_reported() {
     let c = Case::new();
-    assert_rejected(&c, &c.dir.path().join("nope.toml"), &["nope.toml", "cannot read"]);
+    assert_rejected(
+        &c,
+        &c.dir.path().join("nope.toml"),
+        &["nope.toml", "cannot read"],
+    );
 }
 
 fn mesh_scene(c: &Case, file: &str) -> PathBuf {
     scene_with(
         c,
-        &format!("{GOOD_HEAD}{PLANE}\n[[objects]]\nname = \"m\"\nmaterial = \"white\"\nshape = {{ type = \"mesh\", file = \"{file}\" }}\n"),
+        &format!(
+            "{GOOD_HEAD}{PLANE}\n[[objects]]\nname = \"m\"\nmaterial = \"white\"\nshape = {{ type = \"mesh\", file = \"{file}\" }}\n"
+        ),
     )
 }
 
@@ -200,7 +264,11 @@ fn mesh_scene(c: &Case, file: &str) -> PathBuf {
 fn missing_mesh_file_is_named() {
     let c = Case::new();
     let s = mesh_scene(&c, "models/missing.ply");
-    assert_rejected(&c, &s, &["scene.toml", "objects[1].shape.file", "missing.ply"]);
+    assert_rejected(
+        &c,
+        &s,
+        &["scene.toml", "objects[1].shape.file", "missing.ply"],
+    );
 }
 
 const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
@@ -216,7 +284,9 @@ fn truncated_ply_is_reported() {
 #[test]
 fn truncated_binary_ply_is_reported() {
     let c = Case::new();
-    let mut bytes = PLY_HEAD.replace("ascii", "binary_little_endian").into_bytes();
+    let mut bytes = PLY_HEAD
+        .replace("ascii", "binary_little_endian")
+        .into_bytes();
     bytes.extend_from_slice(&[0u8; 20]); // 3 vertices need 36 bytes
     c.file("m.ply", &bytes);
     let s = mesh_scene(&c, "m.ply");
@@ -226,7 +296,10 @@ fn truncated_binary_ply_is_reported() {
 #[test]
 fn ply_face_index_out_of_range_is_reported() {
     let c = Case::new();
-    c.file("m.ply", format!("{PLY_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").as_bytes());
+    c.file(
+        "m.ply",
+        format!("{PLY_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").as_bytes(),
+    );
     let s = mesh_scene(&c, "m.ply");
     assert_rejected(&c, &s, &["scene.toml", "m.ply", "7"]);
 }
@@ -270,7 +343,10 @@ fn unknown_mesh_extension_is_reported() {
 #[test]
 fn all_degenerate_mesh_is_reported() {
     let c = Case::new();
-    c.file("m.ply", format!("{PLY_HEAD}0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n").as_bytes());
+    c.file(
+        "m.ply",
+        format!("{PLY_HEAD}0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n").as_bytes(),
+    );
     let s = mesh_scene(&c, "m.ply");
     assert_rejected(&c, &s, &["scene.toml", "m.ply"]);
 }

@@ -35,7 +35,10 @@ fn ring_indirect_converges_as_inverse_sqrt_spp() {
     };
     let ref_spp = 2048;
     let (reference, _) = render_quiet(&scene, &accel, &opts(ref_spp, 1000));
-    assert!(reference.mean() > 0.0, "the ring must reflect light onto the plane");
+    assert!(
+        reference.mean() > 0.0,
+        "the ring must reflect light onto the plane"
+    );
     let mut points = Vec::new();
     for spp in [4u32, 16, 64] {
         // Average the MSE over 4 independent seeds to tame the heavy tail of caustic samples.

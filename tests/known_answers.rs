@@ -4,8 +4,8 @@
 use glam::{DVec3, Vec3};
 use interreflect::accel::Accel;
 use interreflect::image::Image;
-use interreflect::render::cpu::reference::render_quiet;
 use interreflect::render::cpu::RenderOptions;
+use interreflect::render::cpu::reference::render_quiet;
 use interreflect::scene::Scene;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -74,11 +74,23 @@ fn point_light_over_plane_matches_closed_form() {
     let mut checked = 0;
     for py in 0..img.height {
         for px in 0..img.width {
-            let centre = radiance(on_plane(&scene, px as f32 + 0.5, py as f32 + 0.5, Vec3::Y, 0.0));
+            let centre = radiance(on_plane(
+                &scene,
+                px as f32 + 0.5,
+                py as f32 + 0.5,
+                Vec3::Y,
+                0.0,
+            ));
             let mut lo = DVec3::splat(f64::INFINITY);
             let mut hi = DVec3::splat(f64::NEG_INFINITY);
             for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
-                let v = radiance(on_plane(&scene, px as f32 + dx, py as f32 + dy, Vec3::Y, 0.0));
+                let v = radiance(on_plane(
+                    &scene,
+                    px as f32 + dx,
+                    py as f32 + dy,
+                    Vec3::Y,
+                    0.0,
+                ));
                 lo = lo.min(v);
                 hi = hi.max(v);
             }
@@ -167,7 +179,10 @@ fn two_perpendicular_squares_one_bounce_matches_quadrature() {
         for py in by..by + 6 {
             for px in bx..bx + 6 {
                 let p = on_plane(&scene, px as f32 + 0.5, py as f32 + 0.5, Vec3::X, 0.0);
-                assert!(p.y > 0.1 && p.y < 0.9 && p.z > 0.1 && p.z < 0.9, "block off the wall");
+                assert!(
+                    p.y > 0.1 && p.y < 0.9 && p.z > 0.1 && p.z < 0.9,
+                    "block off the wall"
+                );
                 expect += one_bounce_on_wall(p.as_dvec3());
                 got.push(img.get(px, py).x as f64);
             }
@@ -185,7 +200,10 @@ fn two_perpendicular_squares_one_bounce_matches_quadrature() {
             "block at ({bx},{by}): rendered {mean:.6e}, quadrature {expect:.6e}, tolerance {tol:.3e}"
         );
         // The noise must be small enough for the check to mean something.
-        assert!(tol < 0.05 * expect, "tolerance {tol} too loose for {expect}");
+        assert!(
+            tol < 0.05 * expect,
+            "tolerance {tol} too loose for {expect}"
+        );
         checked += 1;
     }
     assert_eq!(checked, 5);
@@ -193,7 +211,10 @@ fn two_perpendicular_squares_one_bounce_matches_quadrature() {
 
 fn render_with_threads(scene: &Scene, threads: usize) -> Image {
     let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     pool.install(|| render_quiet(scene, &accel, &opts(scene, 4, true, true)).0)
 }
 
@@ -204,6 +225,11 @@ fn reference_is_bit_identical_for_one_and_two_threads() {
     let a = render_with_threads(&scene, 1);
     let b = render_with_threads(&scene, 2);
     assert!(a.data.iter().any(|p| p.x > 0.0));
-    let bits = |i: &Image| i.data.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    let bits = |i: &Image| {
+        i.data
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
     assert_eq!(bits(&a), bits(&b));
 }

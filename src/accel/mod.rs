@@ -67,7 +67,12 @@ impl Accel {
         }
         let tri = bvh.primitive_indices[hit.primitive_id as usize];
         let (u, v) = barycentrics(&self.tris[tri as usize], origin + dir * hit.t);
-        Some(Hit { tri, t: hit.t, u, v })
+        Some(Hit {
+            tri,
+            t: hit.t,
+            u,
+            v,
+        })
     }
 
     /// True when nothing blocks the open segment (tmin, tmax) along `dir` from `origin`.
@@ -152,7 +157,10 @@ mod tests {
                     assert!((p - (o + d * h.t)).length() < 1e-4);
                 }
             }
-            assert_eq!(accel.unoccluded(o, d, 1e-4, f32::INFINITY), best.is_infinite());
+            assert_eq!(
+                accel.unoccluded(o, d, 1e-4, f32::INFINITY),
+                best.is_infinite()
+            );
         }
     }
 

@@ -15,11 +15,30 @@ pub enum Distribution {
 /// A reflection-only BRDF. `diffuse` and `specular` are linear RGB albedos/reflectances.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Brdf {
-    Lambert { diffuse: Vec3 },
-    Phong { diffuse: Vec3, specular: Vec3, exponent: f32 },
-    BlinnPhong { diffuse: Vec3, specular: Vec3, exponent: f32 },
-    Ward { diffuse: Vec3, specular: Vec3, roughness: f32 },
-    CookTorrance { diffuse: Vec3, specular: Vec3, roughness: f32, distribution: Distribution },
+    Lambert {
+        diffuse: Vec3,
+    },
+    Phong {
+        diffuse: Vec3,
+        specular: Vec3,
+        exponent: f32,
+    },
+    BlinnPhong {
+        diffuse: Vec3,
+        specular: Vec3,
+        exponent: f32,
+    },
+    Ward {
+        diffuse: Vec3,
+        specular: Vec3,
+        roughness: f32,
+    },
+    CookTorrance {
+        diffuse: Vec3,
+        specular: Vec3,
+        roughness: f32,
+        distribution: Distribution,
+    },
 }
 
 impl Brdf {

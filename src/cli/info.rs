@@ -49,12 +49,21 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
     println!("lights:");
     for (i, l) in scene.lights.iter().enumerate() {
         match l {
-            Light::Point { position, intensity } => println!(
+            Light::Point {
+                position,
+                intensity,
+            } => println!(
                 "  [{i}] point at {:?}, intensity {:?} W/sr",
                 position.to_array(),
                 intensity.to_array()
             ),
-            Light::Spot { position, direction, intensity, cos_cone, cos_falloff } => println!(
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_cone,
+                cos_falloff,
+            } => println!(
                 "  [{i}] spot at {:?} towards {:?}, intensity {:?} W/sr, cone {:.1}°, falloff from {:.1}°",
                 position.to_array(),
                 direction.to_array(),
@@ -62,7 +71,10 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
                 cos_cone.acos().to_degrees(),
                 cos_falloff.acos().to_degrees()
             ),
-            Light::Directional { direction, irradiance } => println!(
+            Light::Directional {
+                direction,
+                irradiance,
+            } => println!(
                 "  [{i}] directional along {:?}, irradiance {:?} W/m²",
                 direction.to_array(),
                 irradiance.to_array()

@@ -32,10 +32,7 @@ pub enum Command {
         scene: PathBuf,
     },
     /// Convert a mesh (PLY, PLY.gz, OBJ, glTF/GLB) to the compact binary PLY.gz used in scenes/.
-    ConvertMesh {
-        input: PathBuf,
-        output: PathBuf,
-    },
+    ConvertMesh { input: PathBuf, output: PathBuf },
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<i32> {

@@ -88,8 +88,14 @@ fn resolve_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> 
     let (cw, ch) = (scene.camera.width, scene.camera.height);
     let (w, h) = match (args.width, args.height) {
         (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, ((w as u64 * ch as u64 + cw as u64 / 2) / cw as u64).max(1) as u32),
-        (None, Some(h)) => (((h as u64 * cw as u64 + ch as u64 / 2) / ch as u64).max(1) as u32, h),
+        (Some(w), None) => (
+            w,
+            ((w as u64 * ch as u64 + cw as u64 / 2) / cw as u64).max(1) as u32,
+        ),
+        (None, Some(h)) => (
+            ((h as u64 * cw as u64 + ch as u64 / 2) / ch as u64).max(1) as u32,
+            h,
+        ),
         (None, None) => (cw, ch),
     };
     for (name, v) in [("--width", w), ("--height", h)] {
@@ -106,15 +112,26 @@ fn output_path(args: &RenderArgs, scene: &Scene) -> anyhow::Result<PathBuf> {
         .output
         .clone()
         .unwrap_or_else(|| Path::new("results/renders").join(format!("{}.exr", scene.name)));
-    if out.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("exr")) != Some(true) {
-        bail!("--output {}: the output must be an .exr file (a .png is written beside it)", out.display());
+    if out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.eq_ignore_ascii_case("exr"))
+        != Some(true)
+    {
+        bail!(
+            "--output {}: the output must be an .exr file (a .png is written beside it)",
+            out.display()
+        );
     }
     let png = out.with_extension("png");
     let json = out.with_extension("json");
     for input in std::iter::once(&scene.path).chain(scene.inputs.iter()) {
         for o in [&out, &png, &json] {
             if same_file(o, input) {
-                bail!("refusing to overwrite the input {} with an output", input.display());
+                bail!(
+                    "refusing to overwrite the input {} with an output",
+                    input.display()
+                );
             }
         }
     }
@@ -125,7 +142,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let t0 = Instant::now();
     let mut times = Timings::default();
     if args.method == Method::Direct && args.indirect_only {
-        bail!("--indirect-only with --method direct would render nothing: direct renders direct light only");
+        bail!(
+            "--indirect-only with --method direct would render nothing: direct renders direct light only"
+        );
     }
     if let Some(0) = args.threads {
         bail!("--threads must be at least 1");
@@ -163,7 +182,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         scene.objects.len(),
         scene.lights.len(),
         args.method,
-        if args.indirect_only { " (indirect only)" } else { "" },
+        if args.indirect_only {
+            " (indirect only)"
+        } else {
+            ""
+        },
         width,
         height,
         spp,
@@ -250,7 +273,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let text = serde_json::to_string_pretty(&log_data)? + "\n";
     interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes())
         .with_context(|| format!("cannot write {}", json.display()))?;
-    log(format!("wrote {} (linear), {} ({})", out.display(), png.display(), tm.describe()));
+    log(format!(
+        "wrote {} (linear), {} ({})",
+        out.display(),
+        png.display(),
+        tm.describe()
+    ));
     log(format!(
         "time: load {:.2} s, BVH {:.2} s, render {:.2} s, write {:.2} s, total {:.2} s; {:.2} M paths/s, {:.2} M rays/s",
         times.load,

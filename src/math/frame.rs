@@ -52,7 +52,9 @@ mod tests {
             let f = Frame::from_normal(n);
             assert!((f.t.length() - 1.0).abs() < 1e-5);
             assert!((f.b.length() - 1.0).abs() < 1e-5);
-            assert!(f.t.dot(f.b).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5 && f.b.dot(n).abs() < 1e-5);
+            assert!(
+                f.t.dot(f.b).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5 && f.b.dot(n).abs() < 1e-5
+            );
             let v = Vec3::new(0.2, 0.5, -0.7);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
             assert!((f.to_local(n) - Vec3::Z).length() < 1e-5);

@@ -112,7 +112,11 @@ pub fn spherical_triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f32 {
     let num = a.dot(b.cross(c)).abs();
     let den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
     let omega = 2.0 * num.atan2(den);
-    if omega.is_finite() { omega.max(0.0) } else { 0.0 }
+    if omega.is_finite() {
+        omega.max(0.0)
+    } else {
+        0.0
+    }
 }
 
 /// Uniform sampling of the spherical triangle a, b, c (unit vectors) by solid angle
@@ -284,7 +288,11 @@ mod tests {
         }
         let p = sub / area;
         let sigma = (p * (1.0 - p) / n as f32).sqrt();
-        assert!(((hits as f32 / n as f32) - p).abs() < 5.0 * sigma, "p={p} got {}", hits as f32 / n as f32);
+        assert!(
+            ((hits as f32 / n as f32) - p).abs() < 5.0 * sigma,
+            "p={p} got {}",
+            hits as f32 / n as f32
+        );
     }
 
     #[test]

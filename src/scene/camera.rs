@@ -65,8 +65,15 @@ mod tests {
 
     #[test]
     fn centre_ray_is_forward_and_corners_match_fov() {
-        let c = Camera::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0, 200, 100)
-            .unwrap();
+        let c = Camera::look_at(
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            90.0,
+            200,
+            100,
+        )
+        .unwrap();
         assert!((c.ray_dir(100.0, 50.0) - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         // Top edge at 45° for a 90° vertical fov.
         let top = c.ray_dir(100.0, 0.0);

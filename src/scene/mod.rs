@@ -525,9 +525,7 @@ impl Builder {
         if !scale.is_finite() || scale.abs().min_element() < 1e-12 {
             return Err(self.err(sfield, format!("must be finite and non-zero, got {scale}")));
         }
-        Ok(Mat4::from_scale_rotation_translation(
-            scale, rot, translate,
-        ))
+        Ok(Mat4::from_scale_rotation_translation(scale, rot, translate))
     }
 }
 

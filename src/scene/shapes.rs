@@ -56,7 +56,11 @@ pub fn cuboid(size: [f32; 3]) -> MeshData {
     ];
     for (n, u, v) in faces {
         // u × v = n for a counter-clockwise quad seen from outside.
-        let (u, v) = if u.cross(v).dot(n) > 0.0 { (u, v) } else { (v, u) };
+        let (u, v) = if u.cross(v).dot(n) > 0.0 {
+            (u, v)
+        } else {
+            (v, u)
+        };
         let base = m.positions.len() as u32;
         for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
             m.positions.push((n + u * su + v * sv) * h);
@@ -78,7 +82,11 @@ pub fn sphere(radius: f32, segments: u32) -> MeshData {
         let theta = PI * j as f32 / rings as f32;
         for i in 0..=seg {
             let phi = 2.0 * PI * i as f32 / seg as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             positions.push(n * radius);
             normals.push(n);
         }
@@ -186,7 +194,10 @@ mod tests {
                 continue;
             }
             for &i in t {
-                assert!(fnorm.dot(ns[i as usize]) > 0.0, "face {t:?} winding against normal");
+                assert!(
+                    fnorm.dot(ns[i as usize]) > 0.0,
+                    "face {t:?} winding against normal"
+                );
             }
         }
     }
