@@ -1,1 +1,2 @@
 //! scene
+pub mod mesh;
