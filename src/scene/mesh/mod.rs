@@ -29,8 +29,9 @@ pub use ply::write_ply_binary_gz;
 
 /// An indexed triangle mesh.
 ///
-/// `indices` index `positions` (and `normals`, which has the same length when present).
-/// Triangles are counter-clockwise when seen from the side their normals point to.
+/// `indices` index `positions` (and `normals`, which has the same length when present). By
+/// convention triangles are counter-clockwise seen from the side their normals point to;
+/// [`clean_mesh`] repairs normals that disagree with every adjacent triangle's winding.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
     pub positions: Vec<Vec3>,
