@@ -1,38 +1,355 @@
-//! TEMPORARY stub: replaced by the mesh-loading branch.
+//! Triangle meshes: loading (PLY, OBJ, glTF), validation, cleaning and compact PLY output.
+//!
+//! - [`load_mesh`] reads `.ply`, `.ply.gz`, `.obj`, `.obj.gz`, `.gltf` and `.glb` files into a
+//!   [`MeshData`]. Every malformed input (truncation, bad counts, out-of-range indices,
+//!   non-finite coordinates, garbage, corrupt gzip, ...) is a [`MeshError`] whose message names
+//!   the file and the place (line, element, byte offset, accessor) where known; loading never
+//!   panics.
+//! - [`clean_mesh`] removes zero-area and duplicate triangles, drops unused vertices, computes or
+//!   repairs vertex normals and reports what it did in a [`CleanReport`].
+//! - [`write_ply_binary_gz`] writes a compact binary little-endian PLY, gzip-compressed, atomically.
+//! - [`convert`] is load + clean + write (the `convert-mesh` command).
+//!
+//! See `docs/meshes.md` for the formats and the exact rules.
+
+mod clean;
+mod gltf_io;
+mod obj;
+mod ply;
+#[cfg(test)]
+mod tests;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
 use glam::Vec3;
-use std::path::Path;
+
+pub use clean::{AREA_EPSILON, clean_mesh};
+pub use ply::write_ply_binary_gz;
+
+/// An indexed triangle mesh.
+///
+/// `indices` index `positions` (and `normals`, which has the same length when present). By
+/// convention triangles are counter-clockwise seen from the side their normals point to;
+/// [`clean_mesh`] repairs normals that disagree with every adjacent triangle's winding.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
     pub indices: Vec<[u32; 3]>,
 }
+
+impl MeshData {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// Axis-aligned bounding box `(min, max)` of all positions, or `None` when there are none.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+        )
+    }
+}
+
+/// What [`clean_mesh`] changed. Every non-zero removal or repair also appears in `warnings`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct CleanReport {
+    /// Human-readable warnings, each starting with the label passed to [`clean_mesh`].
+    pub warnings: Vec<String>,
+    /// Triangles removed because their area was at most [`AREA_EPSILON`] × bbox diagonal².
+    pub removed_degenerate: usize,
+    /// Triangles removed because an earlier triangle had the same three vertex positions.
+    pub removed_duplicate: usize,
+    /// Vertex normals replaced (zero length, NaN/infinite, or facing away from every adjacent
+    /// triangle).
+    pub repaired_normals: usize,
+    /// True when the mesh had no normals and area-weighted normals were computed.
+    pub computed_normals: bool,
+    /// Vertices dropped because no remaining triangle uses them (not a warning: harmless).
+    pub removed_unused_vertices: usize,
+}
+
+/// Everything that can go wrong loading, cleaning or writing a mesh. Every message starts with
+/// the file path (or the caller's label) and says what is wrong and where.
 #[derive(thiserror::Error, Debug)]
 pub enum MeshError {
-    #[error("{0}")]
-    Other(String),
+    /// The file could not be opened or read.
+    #[error("{}: cannot read the file: {error}", path.display())]
+    Read {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+
+    /// The file name has no supported extension.
+    #[error(
+        "{}: unknown mesh file extension (supported: .ply, .ply.gz, .obj, .obj.gz, .gltf, .glb)",
+        path.display()
+    )]
+    UnknownExtension { path: PathBuf },
+
+    /// The gzip stream is corrupt, truncated or not gzip at all.
+    #[error("{}: corrupt or truncated gzip data: {detail}", path.display())]
+    Gzip { path: PathBuf, detail: String },
+
+    /// Malformed content: bad header, a non-number, an unknown statement, non-text bytes...
+    #[error("{}: {at}: {detail}", path.display())]
+    Syntax {
+        path: PathBuf,
+        at: String,
+        detail: String,
+    },
+
+    /// The file ends before all the data its header (or structure) announces.
+    #[error("{}: truncated file: {at}: {detail}", path.display())]
+    Truncated {
+        path: PathBuf,
+        at: String,
+        detail: String,
+    },
+
+    /// The element counts in the header disagree with the data that follows.
+    #[error("{}: element counts do not match the data: {detail}", path.display())]
+    CountMismatch { path: PathBuf, detail: String },
+
+    /// A face (or glTF index) refers to a vertex, normal or texture coordinate that does not exist.
+    #[error(
+        "{}: {at}: {kind} index {index} is out of range (there are {available} {})",
+        path.display(),
+        plural(kind)
+    )]
+    IndexOutOfRange {
+        path: PathBuf,
+        at: String,
+        kind: &'static str,
+        index: i64,
+        available: usize,
+    },
+
+    /// A vertex position is NaN or infinite.
+    #[error("{}: {at}: non-finite vertex position {value}", path.display())]
+    NonFinite {
+        path: PathBuf,
+        at: String,
+        value: String,
+    },
+
+    /// A face with fewer than three vertices.
+    #[error("{}: {at}: face has {vertices} vertices (a face needs at least 3)", path.display())]
+    FaceTooSmall {
+        path: PathBuf,
+        at: String,
+        vertices: usize,
+    },
+
+    /// No vertices or no faces.
+    #[error("{}: empty mesh: {detail}", path.display())]
+    Empty { path: PathBuf, detail: String },
+
+    /// Valid input using a feature this loader does not support.
+    #[error("{}: unsupported: {detail}", path.display())]
+    Unsupported { path: PathBuf, detail: String },
+
+    /// A glTF-specific problem (invalid JSON/document, unreadable buffer, bad accessor, ...).
+    #[error("{}: invalid glTF: {detail}", path.display())]
+    Gltf { path: PathBuf, detail: String },
+
+    /// A [`MeshData`] given to [`clean_mesh`] or [`write_ply_binary_gz`] is inconsistent.
+    #[error("{label}: invalid mesh data: {detail}")]
+    InvalidMesh { label: String, detail: String },
+
+    /// Cleaning removed every triangle.
+    #[error(
+        "{label}: no triangles left after cleaning: of {total} triangles, {degenerate} had \
+         (near-)zero area and {duplicate} were duplicates"
+    )]
+    NothingLeft {
+        label: String,
+        total: usize,
+        degenerate: usize,
+        duplicate: usize,
+    },
+
+    /// [`convert`] was asked to write over its own input.
+    #[error("{}: refusing to convert a mesh onto itself (the output is the input file)", path.display())]
+    OutputIsInput { path: PathBuf },
+
+    /// [`convert`] writes gzip-compressed PLY only, so the output name must say so.
+    #[error("{}: output file name must end in .ply.gz", path.display())]
+    BadOutputName { path: PathBuf },
+
+    /// The output could not be written.
+    #[error("{}: cannot write the file: {error}", path.display())]
+    Write {
+        path: PathBuf,
+        error: std::io::Error,
+    },
 }
-pub struct CleanReport {
-    pub warnings: Vec<String>,
-    pub removed_degenerate: usize,
-    pub removed_duplicate: usize,
-    pub repaired_normals: usize,
-    pub computed_normals: bool,
+
+/// "vertex" -> "vertices", "normal" -> "normals", ...
+fn plural(kind: &str) -> String {
+    match kind {
+        "vertex" => "vertices".to_string(),
+        other => format!("{other}s"),
+    }
 }
+
+/// The mesh file formats [`load_mesh`] understands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Ply,
+    Obj,
+    Gltf,
+}
+
+/// Picks the format from the file name: `(format, gzip-compressed)`.
+fn format_of(path: &Path) -> Result<(Format, bool), MeshError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let (stem, gz) = match name.strip_suffix(".gz") {
+        Some(stem) => (stem, true),
+        None => (name.as_str(), false),
+    };
+    let format = if stem.ends_with(".ply") {
+        Format::Ply
+    } else if stem.ends_with(".obj") {
+        Format::Obj
+    } else if !gz && (stem.ends_with(".gltf") || stem.ends_with(".glb")) {
+        Format::Gltf
+    } else {
+        return Err(MeshError::UnknownExtension {
+            path: path.to_path_buf(),
+        });
+    };
+    Ok((format, gz))
+}
+
+/// Largest decompressed size accepted from a `.gz` file (a guard against gzip bombs).
+const MAX_DECOMPRESSED_BYTES: u64 = 4 << 30;
+
+/// Decompresses a whole gzip file (all members).
+fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, MeshError> {
+    if !raw.starts_with(&[0x1f, 0x8b]) {
+        return Err(MeshError::Gzip {
+            path: path.to_path_buf(),
+            detail: "not gzip data (the file does not start with the gzip signature 1f 8b)".into(),
+        });
+    }
+    let mut out = Vec::with_capacity(raw.len().saturating_mul(4));
+    let decoder = flate2::read::MultiGzDecoder::new(raw);
+    decoder
+        .take(MAX_DECOMPRESSED_BYTES + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| MeshError::Gzip {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })?;
+    if out.len() as u64 > MAX_DECOMPRESSED_BYTES {
+        return Err(MeshError::Unsupported {
+            path: path.to_path_buf(),
+            detail: format!("decompressed data exceeds {MAX_DECOMPRESSED_BYTES} bytes"),
+        });
+    }
+    Ok(out)
+}
+
+/// Loads a triangle mesh, choosing the format by extension: `.ply`, `.ply.gz` (ASCII, binary
+/// little- or big-endian), `.obj`, `.obj.gz`, `.gltf`, `.glb`. Polygons are fan-triangulated.
+///
+/// Validates everything (see `docs/meshes.md`); non-finite *positions* are errors, while
+/// non-finite or zero *normals* are passed through for [`clean_mesh`] to repair.
 pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
-    Err(MeshError::Other(format!("{}: not yet", path.display())))
+    let (format, gz) = format_of(path)?;
+    let raw = std::fs::read(path).map_err(|error| MeshError::Read {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    // A `.ply`/`.obj` that is really gzip-compressed is decompressed transparently.
+    let data = if gz || (format != Format::Gltf && raw.starts_with(&[0x1f, 0x8b])) {
+        gunzip(path, &raw)?
+    } else {
+        raw
+    };
+    let mesh = match format {
+        Format::Ply => ply::parse_ply(path, &data)?,
+        Format::Obj => obj::parse_obj(path, &data)?,
+        Format::Gltf => gltf_io::parse_gltf(path, &data)?,
+    };
+    debug_assert!(validate(&mesh, &path.display().to_string()).is_ok());
+    Ok(mesh)
 }
-pub fn clean_mesh(mesh: MeshData, _label: &str) -> Result<(MeshData, CleanReport), MeshError> {
-    Ok((
-        mesh,
-        CleanReport {
-            warnings: vec![],
-            removed_degenerate: 0,
-            removed_duplicate: 0,
-            repaired_normals: 0,
-            computed_normals: false,
-        },
-    ))
+
+/// Checks the invariants of a [`MeshData`]: indices in range, finite positions, normals (if any)
+/// as many as positions, at most `u32::MAX` vertices.
+pub(crate) fn validate(mesh: &MeshData, label: &str) -> Result<(), MeshError> {
+    let invalid = |detail: String| MeshError::InvalidMesh {
+        label: label.to_string(),
+        detail,
+    };
+    let n = mesh.positions.len();
+    if u32::try_from(n).is_err() {
+        return Err(invalid(format!(
+            "{n} vertices (at most {} supported)",
+            u32::MAX
+        )));
+    }
+    if let Some(normals) = &mesh.normals
+        && normals.len() != n
+    {
+        return Err(invalid(format!(
+            "{} normals for {n} positions",
+            normals.len()
+        )));
+    }
+    if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(invalid(format!(
+            "vertex {v} has a non-finite position {}",
+            mesh.positions[v]
+        )));
+    }
+    for (t, tri) in mesh.indices.iter().enumerate() {
+        if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
+            return Err(invalid(format!(
+                "triangle {t} refers to vertex {i}, but there are {n} vertices"
+            )));
+        }
+    }
+    Ok(())
 }
-pub fn convert(_input: &Path, _output: &Path) -> Result<CleanReport, MeshError> {
-    Err(MeshError::Other("not yet".into()))
+
+/// Loads `input`, cleans it ([`clean_mesh`], labelled with the input path) and writes it to
+/// `output` as gzip-compressed binary PLY ([`write_ply_binary_gz`]).
+///
+/// Normals are stored only when the input had its own normals: computed area-weighted normals
+/// are a pure function of the cleaned geometry and are recomputed identically on load, so
+/// storing them would only make the file bigger. Refuses `output == input` and an output name
+/// not ending in `.ply.gz`.
+pub fn convert(input: &Path, output: &Path) -> Result<CleanReport, MeshError> {
+    if crate::fsutil::same_file(input, output) {
+        return Err(MeshError::OutputIsInput {
+            path: output.to_path_buf(),
+        });
+    }
+    let out_name = output
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if !out_name.ends_with(".ply.gz") || out_name == ".ply.gz" {
+        return Err(MeshError::BadOutputName {
+            path: output.to_path_buf(),
+        });
+    }
+    let mesh = load_mesh(input)?;
+    let (mut cleaned, report) = clean_mesh(mesh, &input.display().to_string())?;
+    if report.computed_normals {
+        cleaned.normals = None;
+    }
+    write_ply_binary_gz(output, &cleaned)?;
+    Ok(report)
 }
