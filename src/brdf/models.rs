@@ -266,7 +266,7 @@ pub fn sample(brdf: &Brdf, wo: Vec3, u: [f32; 3]) -> Option<Vec3> {
         // Phong n = 0) just outside it, or underflow its density; such directions have pdf 0,
         // and callers divide by the pdf. The set is of measure zero, so rejecting it leaves
         // the sampled density and the integral of `pdf` unchanged.
-        if !(specular_pdf(brdf, wo, wi) > 0.0) {
+        if !(wi.z > 0.0) || !(specular_pdf(brdf, wo, wi) > 0.0) {
             return None;
         }
         wi

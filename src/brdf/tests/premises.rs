@@ -18,6 +18,7 @@ const EXPONENTS: [f32; 9] = [0.0, 1.0, 5.0, 20.0, 100.0, 1e3, 1e4, 1e5, 1e6];
 /// Energy-argument premise: every NDF is normalised, ∫ D(h) cos θh dωh = 1.
 #[test]
 fn ndfs_are_normalised() {
+    let mut worst = 0.0f64;
     for a in ROUGHNESS {
         let b = integrate_upper_about(Vec3::Z, FINE, |h| {
             DVec3::splat((beckmann_d(h, a) * h.z) as f64)
@@ -28,6 +29,7 @@ fn ndfs_are_normalised() {
         // GGX's tail D cos ~ α²/(π cos³θ ...) is captured by the quadrature up to ~1e-7; f32
         // evaluation of D adds ~1e-7 relative. 1e-5 is generous but far below any missing
         // normalisation factor.
+        worst = worst.max((b - 1.0).abs()).max((g - 1.0).abs());
         assert!((b - 1.0).abs() < 1e-5, "Beckmann α={a}: {b}");
         assert!((g - 1.0).abs() < 1e-5, "GGX α={a}: {g}");
     }
@@ -36,8 +38,10 @@ fn ndfs_are_normalised() {
             DVec3::splat((blinn_phong_d(h, n) * h.z) as f64)
         })
         .x;
+        worst = worst.max((v - 1.0).abs());
         assert!((v - 1.0).abs() < 1e-5, "Blinn-Phong n={n}: {v}");
     }
+    println!("NDF normalisation: worst |∫D cos − 1| = {worst:.1e}");
 }
 
 /// Energy-argument premise: the masking functions satisfy the projected-area constraint
@@ -45,6 +49,7 @@ fn ndfs_are_normalised() {
 /// Beckmann and GGX, and the V-cavity G1 with the Blinn-Phong NDF.
 #[test]
 fn masking_satisfies_projected_area_constraint() {
+    let mut worst = 0.0f64;
     for &c in &[1.0f32, 0.7, 0.3, 0.1, 0.02] {
         let wo = dir(c, 0.4);
         for a in [1e-3f32, 0.05, 0.3, 1.0] {
@@ -57,15 +62,20 @@ fn masking_satisfies_projected_area_constraint() {
             };
             let b = smith(beckmann_d, beckmann_lambda);
             let g = smith(ggx_d, ggx_lambda);
-            // erfc has relative error 1.2e-7; the integrand has a kink at wo·h = 0, so the
-            // quadrature converges as O(h²) there: 2e-5 relative covers both (measured < 3e-6).
+            worst = worst
+                .max((b / c as f64 - 1.0).abs())
+                .max((g / c as f64 - 1.0).abs());
+            // erfc has relative error 1.2e-7; the integrand has kinks (at wo·h = 0, and the
+            // V-cavity min()) inside the quadrature rings, where it converges only as O(h²):
+            // measured worst 9.6e-6 relative; 5e-5 leaves margin yet is far below the
+            // percent-level error of a wrong Λ or a non-normalised masking function.
             assert!(
-                (b / c as f64 - 1.0).abs() < 2e-5,
+                (b / c as f64 - 1.0).abs() < 5e-5,
                 "Beckmann α={a} cosθo={c}: {}",
                 b / c as f64
             );
             assert!(
-                (g / c as f64 - 1.0).abs() < 2e-5,
+                (g / c as f64 - 1.0).abs() < 5e-5,
                 "GGX α={a} cosθo={c}: {}",
                 g / c as f64
             );
@@ -75,13 +85,15 @@ fn masking_satisfies_projected_area_constraint() {
                 DVec3::splat((v_cavity_g1(wo, h) * wo.dot(h).max(0.0) * blinn_phong_d(h, n)) as f64)
             })
             .x;
+            worst = worst.max((v / c as f64 - 1.0).abs());
             assert!(
-                (v / c as f64 - 1.0).abs() < 2e-5,
+                (v / c as f64 - 1.0).abs() < 5e-5,
                 "V-cavity n={n} cosθo={c}: {}",
                 v / c as f64
             );
         }
     }
+    println!("projected-area constraint: worst relative error {worst:.1e}");
 }
 
 /// The constant S̄ of the coupled diffuse term is 2 ∫₀¹ w(μ) μ dμ, rounded up.
