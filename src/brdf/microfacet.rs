@@ -9,8 +9,8 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-/// Smallest cosine used in a denominator. Raising a cosine only ever lowers f, so the clamp can
-/// remove energy (from a band of solid angle ≈ 2π·1e-7) but never create it.
+/// Smallest cosine used in a denominator (and in the Smith Λ). It only changes f within 1e-7 of
+/// the horizon (a band of solid angle ≈ 2π·1e-7), where the clamped values stay bounded.
 pub const COS_EPS: f32 = 1e-7;
 
 /// Mirror reflection of `w` about the unit vector `m`: 2 (w·m) m − w.
@@ -71,7 +71,7 @@ pub fn pow_one_minus(d: f32, n: f32) -> f32 {
     (n * (-d).ln_1p()).exp()
 }
 
-/// Schlick's approximation (Schlick 1994, eq. 24): F = F0 + (1 − F0)(1 − cos)^5, per channel.
+/// Schlick's approximation (Schlick 1994): F = F0 + (1 − F0)(1 − cos)^5, per channel.
 #[inline]
 pub fn schlick_fresnel(f0: Vec3, cos: f32) -> Vec3 {
     let m = (1.0 - cos.clamp(0.0, 1.0)).max(0.0);
@@ -79,8 +79,8 @@ pub fn schlick_fresnel(f0: Vec3, cos: f32) -> Vec3 {
     f0 + (Vec3::ONE - f0) * (m2 * m2 * m)
 }
 
-/// Blinn's normalised cosine-power NDF (Blinn 1977; normalisation as in Walter et al. 2007
-/// eq. 30): D(h) = (n + 2)/(2π) cos^n θh, so that ∫ D(h) cos θh dωh = 1.
+/// Blinn's normalised cosine-power NDF (Blinn 1977; normalisation as in Walter et al. 2007):
+/// D(h) = (n + 2)/(2π) cos^n θh, so that ∫ D(h) cos θh dωh = 1.
 #[inline]
 pub fn blinn_phong_d(h: Vec3, n: f32) -> f32 {
     if !(h.z > 0.0) {
@@ -104,8 +104,8 @@ pub fn blinn_phong_pdf_h(h: Vec3, n: f32) -> f32 {
     blinn_phong_d(h, n) * h.z.max(0.0)
 }
 
-/// Samples a direction about +z with density (e + 1)/(2π) cos^e θ (Lafortune & Willems 1994,
-/// eq. 9): cos θ = u1^(1/(e+1)), φ = 2π u2.
+/// Samples a direction about +z with density (e + 1)/(2π) cos^e θ (Lafortune & Willems 1994):
+/// cos θ = u1^(1/(e+1)), φ = 2π u2.
 pub fn power_cosine_sample(e: f32, u: Vec2) -> Vec3 {
     let ln_u = u.x.max(f32::MIN_POSITIVE).ln();
     let k = 1.0 / (e + 1.0);
@@ -115,7 +115,7 @@ pub fn power_cosine_sample(e: f32, u: Vec2) -> Vec3 {
     Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)
 }
 
-/// Beckmann NDF (Beckmann & Spizzichino 1963; Walter et al. 2007 eq. 25):
+/// Beckmann NDF (Beckmann & Spizzichino 1963; Walter et al. 2007):
 /// D(h) = exp(−tan²θh / α²) / (π α² cos⁴θh).
 #[inline]
 pub fn beckmann_d(h: Vec3, alpha: f32) -> f32 {
@@ -132,7 +132,7 @@ pub fn beckmann_d(h: Vec3, alpha: f32) -> f32 {
     (-e).exp() / (PI * a2 * c2 * c2)
 }
 
-/// Samples h ∝ D_Beckmann(h) cos θh (Walter et al. 2007 eqs. 28–29):
+/// Samples h ∝ D_Beckmann(h) cos θh (Walter et al. 2007):
 /// tan²θh = −α² ln(1 − u1), φ = 2π u2.
 pub fn beckmann_sample(alpha: f32, u: Vec2) -> Vec3 {
     let tan2 = -alpha * alpha * (1.0 - u.x).max(f32::MIN_POSITIVE).ln();
@@ -143,7 +143,7 @@ pub fn beckmann_sample(alpha: f32, u: Vec2) -> Vec3 {
 }
 
 /// Complementary error function, Numerical Recipes' `erfcc` (Press et al. 1992, §6.2,
-/// Chebyshev fit): fractional error < 1.2e-7 everywhere.
+/// a Chebyshev-based fit): fractional error < 1.2e-7 everywhere.
 pub fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
@@ -159,7 +159,7 @@ pub fn erfc(x: f64) -> f64 {
     if x >= 0.0 { ans } else { 2.0 - ans }
 }
 
-/// Smith Λ of the Beckmann distribution (Walter et al. 2007 eq. 27 / Heitz 2014 eq. 83):
+/// Smith Λ of the Beckmann distribution (Walter et al. 2007; Heitz 2014):
 /// Λ(w) = (erf(a) − 1)/2 + exp(−a²)/(2a√π), a = 1/(α tan θ) = cos θ / (α sin θ).
 pub fn beckmann_lambda(w: Vec3, alpha: f32) -> f32 {
     let c = w.z.max(COS_EPS) as f64;
@@ -176,7 +176,7 @@ pub fn beckmann_lambda(w: Vec3, alpha: f32) -> f32 {
     l.max(0.0) as f32
 }
 
-/// Smith Λ of GGX (Walter et al. 2007 eq. 34 / Heitz 2014 eq. 86):
+/// Smith Λ of GGX (Walter et al. 2007; Heitz 2014):
 /// Λ(w) = (−1 + √(1 + α² tan²θ)) / 2, written as (√(cos² + α² sin²) − cos) / (2 cos).
 pub fn ggx_lambda(w: Vec3, alpha: f32) -> f32 {
     let c = w.z.max(COS_EPS);
@@ -184,7 +184,7 @@ pub fn ggx_lambda(w: Vec3, alpha: f32) -> f32 {
     ((s - c) / (2.0 * c)).max(0.0)
 }
 
-/// GGX (Trowbridge–Reitz) NDF (Walter et al. 2007 eq. 33):
+/// GGX (Trowbridge–Reitz) NDF (Walter et al. 2007):
 /// D(h) = α² / (π (cos²θh (α² − 1) + 1)²), evaluated as α² / (π (sin²θh + α² cos²θh)²).
 #[inline]
 pub fn ggx_d(h: Vec3, alpha: f32) -> f32 {
@@ -204,7 +204,7 @@ fn ggx_s(w: Vec3, alpha: f32) -> f32 {
 }
 
 /// GGX height-correlated Smith visibility V = G2 / (4 cos θi cos θo) with
-/// G2 = 1 / (1 + Λ(wo) + Λ(wi)) (Heitz 2014 eq. 99), in the closed form
+/// G2 = 1 / (1 + Λ(wo) + Λ(wi)) (Heitz 2014, height-correlated Smith), in the closed form
 /// V = 1 / (2 (cos θi √(cos²θo + α² sin²θo) + cos θo √(cos²θi + α² sin²θi))).
 #[inline]
 pub fn ggx_visibility(wo: Vec3, wi: Vec3, alpha: f32) -> f32 {
@@ -213,7 +213,7 @@ pub fn ggx_visibility(wo: Vec3, wi: Vec3, alpha: f32) -> f32 {
     1.0 / (2.0 * (ci * ggx_s(wo, alpha) + co * ggx_s(wi, alpha)))
 }
 
-/// Solid-angle pdf (in h) of GGX visible-normal sampling (Heitz 2018 eq. 3):
+/// Solid-angle pdf (in h) of GGX visible-normal sampling (Heitz 2018, JCGT 7(4)):
 /// D_wo(h) = G1(wo) max(0, wo·h) D(h) / cos θo, with G1 = 1 / (1 + Λ(wo)).
 #[inline]
 pub fn ggx_visible_pdf_h(wo: Vec3, h: Vec3, alpha: f32) -> f32 {
@@ -227,8 +227,8 @@ pub fn ggx_visible_pdf_h(wo: Vec3, h: Vec3, alpha: f32) -> f32 {
 }
 
 /// Solid-angle pdf (in wi) of reflecting wo about a GGX visible normal:
-/// D_wo(h) / (4 wo·h) = G1(wo) D(h) / (4 cos θo) (Heitz 2018 eq. 17 with the Jacobian
-/// dωh/dωi = 1 / (4 wo·h) of Walter et al. 2007 eq. 14). `h` must satisfy wo·h > 0, which holds
+/// D_wo(h) / (4 wo·h) = G1(wo) D(h) / (4 cos θo) (Heitz 2018, with the Jacobian
+/// dωh/dωi = 1 / (4 wo·h) of Walter et al. 2007). `h` must satisfy wo·h > 0, which holds
 /// for the half vector of two above-horizon directions.
 #[inline]
 pub fn ggx_visible_pdf_wi(wo: Vec3, h: Vec3, alpha: f32) -> f32 {
@@ -237,7 +237,7 @@ pub fn ggx_visible_pdf_wi(wo: Vec3, h: Vec3, alpha: f32) -> f32 {
 }
 
 /// Samples a GGX visible normal for `wo` with the spherical-cap method of Dupuy & Benyoub,
-/// "Sampling Visible GGX Normals with Spherical Caps" (HPG 2023, listing 3). `None` on the
+/// "Sampling Visible GGX Normals with Spherical Caps" (HPG 2023). `None` on the
 /// measure-zero degenerate case.
 pub fn ggx_sample_visible(wo: Vec3, alpha: f32, u: Vec2) -> Option<Vec3> {
     // Stretch wo into the configuration where the distribution is the unit hemisphere.

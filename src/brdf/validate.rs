@@ -3,8 +3,9 @@
 use super::Brdf;
 use glam::Vec3;
 
-/// Smallest accepted roughness α. Below it the f32 NDFs peak above 3e5 / sr and the lobe is
-/// narrower than the f32 angular resolution near the pole, so sampling and pdf disagree.
+/// Smallest accepted roughness α: the lower end of the range the energy, χ² and robustness tests
+/// cover. Narrower lobes (NDF peak above 3e5 / sr, width below 1e-3 rad) approach the angular
+/// resolution of f32 directions near grazing and are better modelled as a mirror.
 pub const MIN_ROUGHNESS: f32 = 1e-3;
 /// Largest accepted roughness α (α = 1 is already a very rough surface; the energy tests
 /// cover [MIN_ROUGHNESS, 1]).

@@ -6,6 +6,8 @@
 
 mod chi2;
 mod energy;
+mod pdf;
+mod premises;
 mod robust;
 
 use super::{Brdf, Distribution};
@@ -110,7 +112,7 @@ fn arc_half_width(a: f64, b: f64) -> f64 {
 }
 
 /// ∫ g(wi) dωi over the upper hemisphere (wi.z > 0), computed in the half-vector domain:
-/// wi = 2 (wo·h) h − wo, dωi = 4 (wo·h) dωh (Walter et al. 2007 eq. 14). Used for the
+/// wi = 2 (wo·h) h − wo, dωi = 4 (wo·h) dωh (Walter et al. 2007). Used for the
 /// microfacet models: their lobes are isotropic bumps around h = n there (as narrow as
 /// α = 1e-3), whereas in wi-space a lobe near grazing is compressed sideways by cos θo.
 ///
