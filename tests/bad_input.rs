@@ -95,7 +95,7 @@ fn malformed_toml_reports_line_and_column() {
         &c,
         &format!("{GOOD_HEAD}\n[[objects]\nmaterial = \"white\"\n"),
     );
-    assert_rejected(&c, &s, &["scene.toml", "line 19", "column"]);
+    assert_rejected(&c, &s, &["scene.toml", "line 18", "column 11"]);
 }
 
 #[test]

@@ -32,6 +32,7 @@ fn ring_indirect_converges_as_inverse_sqrt_spp() {
         indirect: true,
         reflector_samples: scene.settings.reference.reflector_samples,
         bsdf_samples: scene.settings.reference.bsdf_samples,
+        light_paths: scene.settings.reference.light_paths,
     };
     let ref_spp = 2048;
     let (reference, _) = render_quiet(&scene, &accel, &opts(ref_spp, 1000));

@@ -86,11 +86,12 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
         println!("  {:<12} {:?}", m.name, m.brdf);
     }
     println!(
-        "render defaults: spp {}, seed {}; reference: {} reflector sample(s) + {} BRDF sample(s) per path",
+        "render defaults: spp {}, seed {}; reference: {} BRDF sample(s), {} reflector sample(s) and {} light path(s) per camera sample",
         scene.settings.spp,
         scene.settings.seed,
+        scene.settings.reference.bsdf_samples,
         scene.settings.reference.reflector_samples,
-        scene.settings.reference.bsdf_samples
+        scene.settings.reference.light_paths
     );
     Ok(0)
 }

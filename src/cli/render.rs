@@ -7,6 +7,7 @@ use interreflect::fsutil::same_file;
 use interreflect::image::{Tonemap, write_exr, write_png};
 use interreflect::render::Method;
 use interreflect::render::checks::camera_inside_geometry;
+use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::{Progress, RenderOptions, render};
 use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
 use serde::Serialize;
@@ -65,10 +66,12 @@ struct RenderLog<'a> {
     threads: usize,
     reflector_samples: u32,
     bsdf_samples: u32,
+    light_paths_per_sample: u32,
     triangles: usize,
     tonemap: String,
     seconds: Timings,
-    paths: u64,
+    camera_paths: u64,
+    light_paths: u64,
     rays: u64,
     paths_per_second: f64,
     rays_per_second: f64,
@@ -211,12 +214,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         indirect: args.method == Method::Reference,
         reflector_samples: r.reflector_samples,
         bsdf_samples: r.bsdf_samples,
+        light_paths: r.light_paths,
     };
-    let pb = progress::bar(height as u64, "rendering", args.quiet);
+    let pb = progress::bar(work_units(&opts), "rendering", args.quiet);
     let cancel = progress::interrupt_flag();
-    let rows_done = |n: u64| pb.inc(n);
+    let done = |n: u64| pb.inc(n);
     let prog = Progress {
-        rows_done: &rows_done,
+        done: &done,
         cancel,
     };
     let t = Instant::now();
@@ -261,12 +265,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         threads,
         reflector_samples: r.reflector_samples,
         bsdf_samples: r.bsdf_samples,
+        light_paths_per_sample: r.light_paths,
         triangles: scene.mesh.indices.len(),
         tonemap: tm.describe(),
         seconds: times,
-        paths: stats.paths,
+        camera_paths: stats.camera_paths,
+        light_paths: stats.light_paths,
         rays: stats.rays,
-        paths_per_second: stats.paths as f64 / times.render.max(1e-9),
+        paths_per_second: (stats.camera_paths + stats.light_paths) as f64 / times.render.max(1e-9),
         rays_per_second: stats.rays as f64 / times.render.max(1e-9),
         nonfinite_samples: stats.nonfinite_samples,
     };

@@ -45,7 +45,7 @@ pub enum SceneError {
     Mesh {
         path: PathBuf,
         field: String,
-        source: mesh::MeshError,
+        source: Box<mesh::MeshError>,
     },
 }
 
@@ -331,15 +331,16 @@ impl Builder {
         for (f, v) in [
             ("methods.reference.reflector_samples", r.reflector_samples),
             ("methods.reference.bsdf_samples", r.bsdf_samples),
+            ("methods.reference.light_paths", r.light_paths),
         ] {
             if v > 64 {
                 return Err(self.err(f, format!("must be between 0 and 64, got {v}")));
             }
         }
-        if r.reflector_samples == 0 && r.bsdf_samples == 0 {
+        if r.reflector_samples == 0 && r.bsdf_samples == 0 && r.light_paths == 0 {
             return Err(self.err(
                 "methods.reference",
-                "reflector_samples and bsdf_samples cannot both be 0",
+                "reflector_samples, bsdf_samples and light_paths cannot all be 0",
             ));
         }
         Ok(Scene {
@@ -447,14 +448,14 @@ impl Builder {
                 let data = mesh::load_mesh(&p).map_err(|source| SceneError::Mesh {
                     path: self.path.clone(),
                     field: sf("file"),
-                    source,
+                    source: Box::new(source),
                 })?;
                 let label = format!("{field} \"{oname}\" ({file})");
                 let (data, report) =
                     mesh::clean_mesh(data, &label).map_err(|source| SceneError::Mesh {
                         path: self.path.clone(),
                         field: sf("file"),
-                        source,
+                        source: Box::new(source),
                     })?;
                 self.warnings.extend(report.warnings);
                 inputs.push(p);

@@ -226,6 +226,9 @@ pub struct ReferenceSpec {
     /// Directions sampled from the receiver's BRDF per camera sample.
     #[serde(default = "one")]
     pub bsdf_samples: u32,
+    /// Light paths (light tracing) per camera sample.
+    #[serde(default = "one")]
+    pub light_paths: u32,
 }
 
 impl Default for ReferenceSpec {
@@ -233,6 +236,7 @@ impl Default for ReferenceSpec {
         ReferenceSpec {
             reflector_samples: 1,
             bsdf_samples: 1,
+            light_paths: 1,
         }
     }
 }

@@ -1,22 +1,26 @@
 //! The reference renderer: direct light plus exactly one indirect bounce, exact visibility.
 //!
-//! The one-bounce term L₁(x, o) = ∫ L_r(y → x) f_x(ω, o) cos θ_x V(x, y) dω is estimated with two
-//! strategies combined by the balance heuristic (Veach 1997, multi-sample MIS):
+//! The one-bounce term L₁(x, o) = ∫ L_r(y → x) f_x(ω, o) cos θ_x V(x, y) dω is estimated with
+//! three strategies combined by the balance heuristic (Veach 1997, multi-sample MIS):
 //! 1. BRDF sampling at the receiver x: sample ω from f_x, trace to y, light y with next-event
 //!    estimation for every light;
 //! 2. light-side sampling of reflector points: pick a light and a reflector triangle ∝ the flux
-//!    it receives, a uniform point y on it, and connect x ↔ y.
+//!    it receives, a uniform point y on it, and connect x ↔ y;
+//! 3. light tracing: pick y as in 2, sample the reflected direction from f_y, trace to x and
+//!    connect x to the camera, splatting into the pixel that sees x.
 //!
-//! Strategy 2 makes glossy caustics (light → glossy reflector → diffuse receiver, e.g. the ring's
-//! cardioid) converge; strategy 1 handles glossy receivers. Random streams are keyed by
-//! (seed, pixel, sample), so the image does not depend on the thread count.
+//! Strategy 3 makes glossy caustics (light → glossy reflector → diffuse receiver, e.g. the ring's
+//! cardioid) converge; strategy 1 handles glossy receivers; strategy 2 covers the paths in
+//! between. Random streams are keyed by (seed, pixel, sample) for camera paths and by
+//! (seed, light-path index) for light paths, and splats are summed in a fixed order, so the
+//! image does not depend on the thread count.
 
 use super::reflectors::ReflectorSampler;
 use super::surface::{SurfacePoint, ray_epsilon, reflected_light};
 use crate::accel::Accel;
 use crate::image::Image;
 use crate::math::Rng;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -36,13 +40,17 @@ pub struct RenderOptions {
     pub reflector_samples: u32,
     /// BRDF directions per camera sample (strategy 1).
     pub bsdf_samples: u32,
+    /// Light paths per camera sample (strategy 3, light tracing).
+    pub light_paths: u32,
 }
 
 /// Counters of a finished render.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct RenderStats {
     /// Camera paths traced (pixels × spp).
-    pub paths: u64,
+    pub camera_paths: u64,
+    /// Light paths traced (pixels × spp × light_paths).
+    pub light_paths: u64,
     /// Rays traced (camera, continuation, connection and shadow rays).
     pub rays: u64,
     /// Samples dropped because they were not finite (should stay 0).
@@ -51,10 +59,32 @@ pub struct RenderStats {
 
 /// Progress reporting and cancellation, shared by the worker threads.
 pub struct Progress<'a> {
-    /// Called with the number of image rows just finished.
-    pub rows_done: &'a (dyn Fn(u64) + Sync),
+    /// Called with the number of work units just finished (see [`work_units`]).
+    pub done: &'a (dyn Fn(u64) + Sync),
     /// When set, rendering stops early and `render` returns `None`.
     pub cancel: &'a AtomicBool,
+}
+
+/// Light paths per work unit of the light-tracing pass.
+const LIGHT_CHUNK: u64 = 1 << 14;
+/// Work units processed (in parallel) before their splats are added in order.
+const CHUNKS_PER_BATCH: u64 = 64;
+
+/// Total work units of a render: one per image row plus one per chunk of light paths.
+pub fn work_units(opts: &RenderOptions) -> u64 {
+    opts.height as u64 + light_chunks(opts)
+}
+
+fn light_path_count(opts: &RenderOptions) -> u64 {
+    if opts.indirect {
+        opts.width as u64 * opts.height as u64 * opts.spp as u64 * opts.light_paths as u64
+    } else {
+        0
+    }
+}
+
+fn light_chunks(opts: &RenderOptions) -> u64 {
+    light_path_count(opts).div_ceil(LIGHT_CHUNK)
 }
 
 /// Renders `scene` with the reference estimator (or direct light only with
@@ -65,17 +95,28 @@ pub fn render(
     opts: &RenderOptions,
     progress: &Progress,
 ) -> Option<(Image, RenderStats)> {
+    let sampler = if opts.indirect && (opts.reflector_samples > 0 || opts.light_paths > 0) {
+        Some(ReflectorSampler::new(scene)).filter(|s| !s.is_empty())
+    } else {
+        None
+    };
+    let camera = scene.camera.with_resolution(opts.width, opts.height);
+    let tan_half = (0.5 * camera.fov_y).tan();
+    let n_light = if sampler.is_some() {
+        light_path_count(opts)
+    } else {
+        0
+    };
     let ctx = Ctx {
         scene,
         accel,
         eps: ray_epsilon(scene),
-        sampler: if opts.indirect && opts.reflector_samples > 0 {
-            Some(ReflectorSampler::new(scene))
-        } else {
-            None
-        },
+        sampler,
         opts: *opts,
-        camera: scene.camera.with_resolution(opts.width, opts.height),
+        camera,
+        tan_half,
+        pixel_area: (2.0 * tan_half / opts.height as f32).powi(2),
+        n_light: n_light as f32,
     };
     let rays = AtomicU64::new(0);
     let bad = AtomicU64::new(0);
@@ -91,13 +132,17 @@ pub fn render(
         }
         rays.fetch_add(counters.rays, Ordering::Relaxed);
         bad.fetch_add(counters.bad, Ordering::Relaxed);
-        (progress.rows_done)(1);
+        (progress.done)(1);
     });
+    if n_light > 0 {
+        ctx.light_pass(n_light, &mut img, progress, &rays, &bad);
+    }
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
     }
     let stats = RenderStats {
-        paths: opts.width as u64 * opts.height as u64 * opts.spp as u64,
+        camera_paths: opts.width as u64 * opts.height as u64 * opts.spp as u64,
+        light_paths: n_light,
         rays: rays.into_inner(),
         nonfinite_samples: bad.into_inner(),
     };
@@ -116,10 +161,83 @@ struct Ctx<'a> {
     eps: f32,
     sampler: Option<ReflectorSampler>,
     opts: RenderOptions,
-    camera: crate::scene::Camera,
+    camera: Camera,
+    tan_half: f32,
+    /// Area of a pixel on the image plane at distance 1.
+    pixel_area: f32,
+    /// Light paths in the whole render (0: no light tracing).
+    n_light: f32,
+}
+
+/// The geometry of a one-bounce path light → y → x → camera that the MIS weights need.
+struct PathTerms {
+    /// Receiver BRDF pdf of the direction x → y (solid angle).
+    pdf_bsdf_x: f32,
+    /// Probability of the light times area density of y under light-side sampling.
+    pdf_area_y: f32,
+    /// Reflector BRDF pdf of y → x given the light direction (solid angle).
+    pdf_bsdf_y: f32,
+    /// |x − y|².
+    dist2: f32,
+    /// |cos| at y and (geometric) at x of the segment x–y.
+    cos_y: f32,
+    cos_x: f32,
+    /// Area density with which the camera's pixel sampling produces x.
+    pdf_camera_x: f32,
 }
 
 impl Ctx<'_> {
+    /// Balance-heuristic denominator D of a path for the three strategies, so that a camera
+    /// sample contributes spp·f·L/D and a light path f·L/D (f·L: receiver BRDF × cosine ×
+    /// radiance leaving y). Written in solid angle at x times spp:
+    /// D = spp·n₁·p₁ + spp·n₂·p₂(y)·d²/cos_y + N_L·p₂(y)·p_y·cos_x/(p_cam(x)·cos_y).
+    fn mis_denominator(&self, t: &PathTerms) -> f32 {
+        let spp = self.opts.spp as f32;
+        let n1 = self.opts.bsdf_samples as f32;
+        let n2 = if self.sampler.is_some() {
+            self.opts.reflector_samples as f32
+        } else {
+            0.0
+        };
+        let cos_y = t.cos_y.max(1e-12);
+        let mut d = spp * n1 * t.pdf_bsdf_x + spp * n2 * t.pdf_area_y * t.dist2 / cos_y;
+        if self.n_light > 0.0 && t.pdf_camera_x > 0.0 {
+            d += self.n_light * t.pdf_area_y * t.pdf_bsdf_y * t.cos_x / (t.pdf_camera_x * cos_y);
+        }
+        d
+    }
+
+    /// Area density of x under the camera's pixel sampling (box filter): cos at x over
+    /// (r² · pixel area · cos³ of the angle to the optical axis).
+    fn pdf_camera(&self, x: &SurfacePoint, to_camera: Vec3, r: f32) -> f32 {
+        let cos_axis = (-to_camera).dot(self.camera.forward);
+        if !(cos_axis > 0.0) {
+            return 0.0;
+        }
+        x.ng.dot(to_camera).abs() / (r * r * self.pixel_area * cos_axis.powi(3))
+    }
+
+    /// Light-side pdfs of reaching y (on `tri`, oriented `yp`) and leaving it towards x along
+    /// `w_yx` for light `k`.
+    fn light_side_pdfs(&self, k: usize, yp: &SurfacePoint, w_yx: Vec3) -> (f32, f32) {
+        let Some(s) = self.sampler.as_ref() else {
+            return (0.0, 0.0);
+        };
+        let pa = s.pdf_area(k, yp.tri);
+        if pa == 0.0 || self.n_light == 0.0 {
+            return (pa, 0.0);
+        }
+        let Some(inc) = self.scene.lights[k].incident(yp.p) else {
+            return (pa, 0.0);
+        };
+        let wl = yp.frame.to_local(inc.wi);
+        let wo = yp.frame.to_local(w_yx);
+        if wl.z <= 0.0 || wo.z <= 0.0 {
+            return (pa, 0.0);
+        }
+        (pa, self.scene.tri_material(yp.tri).pdf(wl, wo))
+    }
+
     fn pixel(&self, x: u32, y: u32, c: &mut Counters) -> Vec3 {
         let pixel = y as u64 * self.opts.width as u64 + x as u64;
         let mut sum = DVec3::ZERO;
@@ -159,25 +277,28 @@ impl Ctx<'_> {
             }
         }
         if self.opts.indirect && self.scene.tri_object(hit.tri).receiver {
-            l += self.indirect(&sp, wo, rng, c);
+            let pdf_cam = self.pdf_camera(&sp, wo, hit.t);
+            l += self.indirect(&sp, wo, pdf_cam, rng, c);
         }
         l
     }
 
-    /// The one-bounce term at receiver `x` towards `wo`, both strategies under MIS.
-    fn indirect(&self, x: &SurfacePoint, wo: Vec3, rng: &mut Rng, c: &mut Counters) -> Vec3 {
+    /// The one-bounce term at receiver `x` towards `wo` from the two camera-side strategies,
+    /// weighted against each other and against light tracing.
+    fn indirect(
+        &self,
+        x: &SurfacePoint,
+        wo: Vec3,
+        pdf_cam: f32,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) -> Vec3 {
         let brdf = self.scene.tri_material(x.tri);
         let wo_l = x.frame.to_local(wo);
         if wo_l.z <= 0.0 {
             return Vec3::ZERO;
         }
-        let nb = self.opts.bsdf_samples as f32;
-        let sampler = self.sampler.as_ref().filter(|s| !s.is_empty());
-        let nr = if sampler.is_some() {
-            self.opts.reflector_samples as f32
-        } else {
-            0.0
-        };
+        let spp = self.opts.spp as f32;
         let mut l = Vec3::ZERO;
         // Strategy 1: BRDF sampling at the receiver.
         for _ in 0..self.opts.bsdf_samples {
@@ -208,23 +329,27 @@ impl Ctx<'_> {
                 continue;
             };
             let ybrdf = self.scene.tri_material(hit.tri);
-            let cos_y = yp.ng.dot(-wi).abs();
-            let g = hit.t * hit.t / cos_y.max(1e-12);
             for (k, light) in self.scene.lights.iter().enumerate() {
                 c.rays += 1;
                 let lr = reflected_light(self.accel, ybrdf, &yp, -wi, light, self.eps);
                 if lr == Vec3::ZERO {
                     continue;
                 }
-                let p3 = match sampler {
-                    Some(s) => nr * s.pdf_area(k, hit.tri) * g,
-                    None => 0.0,
-                };
-                l += f * lr / (nb * pdf_b + p3);
+                let (pdf_area_y, pdf_bsdf_y) = self.light_side_pdfs(k, &yp, -wi);
+                let d = self.mis_denominator(&PathTerms {
+                    pdf_bsdf_x: pdf_b,
+                    pdf_area_y,
+                    pdf_bsdf_y,
+                    dist2: hit.t * hit.t,
+                    cos_y: yp.ng.dot(-wi).abs(),
+                    cos_x: x.ng.dot(wi).abs(),
+                    pdf_camera_x: pdf_cam,
+                });
+                l += spp * f * lr / d;
             }
         }
         // Strategy 2: light-side sampling of reflector points, connected to x.
-        if let Some(s) = sampler {
+        if let Some(s) = self.sampler.as_ref() {
             for _ in 0..self.opts.reflector_samples {
                 let (ul, ut, up) = (rng.f32(), rng.f32(), rng.vec2());
                 let Some(rs) = s.sample(ul, ut, up) else {
@@ -258,14 +383,8 @@ impl Ctx<'_> {
                 }
                 let ybrdf = self.scene.tri_material(rs.tri);
                 c.rays += 1;
-                let lr = reflected_light(
-                    self.accel,
-                    ybrdf,
-                    &yp,
-                    -wi,
-                    &self.scene.lights[rs.light],
-                    self.eps,
-                );
+                let light = &self.scene.lights[rs.light];
+                let lr = reflected_light(self.accel, ybrdf, &yp, -wi, light, self.eps);
                 if lr == Vec3::ZERO {
                     continue;
                 }
@@ -274,18 +393,185 @@ impl Ctx<'_> {
                 if !self.accel.unoccluded(x.offset(self.eps), wi, 0.0, tmax) {
                     continue;
                 }
-                let p3 = nr * rs.pdf_area * dist2 / cos_y;
-                let pb = if nb > 0.0 {
-                    nb * brdf.pdf(wo_l, wi_l)
-                } else {
-                    0.0
-                };
-                l += f * lr / (pb + p3);
+                let (_, pdf_bsdf_y) = self.light_side_pdfs(rs.light, &yp, -wi);
+                let den = self.mis_denominator(&PathTerms {
+                    pdf_bsdf_x: brdf.pdf(wo_l, wi_l),
+                    pdf_area_y: rs.pdf_area,
+                    pdf_bsdf_y,
+                    dist2,
+                    cos_y,
+                    cos_x: x.ng.dot(wi),
+                    pdf_camera_x: pdf_cam,
+                });
+                l += spp * f * lr / den;
             }
         }
         l
     }
+
+    /// Strategy 3, light tracing: `n` light paths light → y (light-side sampling) → BRDF
+    /// sample at y → x → splat into the pixel that sees x. Chunks of paths run in parallel and
+    /// their splats are added in chunk order, so the sum does not depend on the thread count.
+    fn light_pass(
+        &self,
+        n: u64,
+        img: &mut Image,
+        progress: &Progress,
+        rays: &AtomicU64,
+        bad: &AtomicU64,
+    ) {
+        let chunks = n.div_ceil(LIGHT_CHUNK);
+        let mut acc: Vec<DVec3> = img.data.iter().map(|p| p.as_dvec3()).collect();
+        let mut start = 0;
+        while start < chunks {
+            if progress.cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            let end = (start + CHUNKS_PER_BATCH).min(chunks);
+            let splats: Vec<Vec<(u32, Vec3)>> = (start..end)
+                .into_par_iter()
+                .map(|chunk| {
+                    let mut out = Vec::new();
+                    let mut c = Counters::default();
+                    let lo = chunk * LIGHT_CHUNK;
+                    let hi = (lo + LIGHT_CHUNK).min(n);
+                    for i in lo..hi {
+                        let mut rng = Rng::keyed(self.opts.seed, LIGHT_STREAM, i);
+                        if let Some((px, v)) = self.light_path(&mut rng, &mut c) {
+                            if v.is_finite() {
+                                out.push((px, v));
+                            } else {
+                                c.bad += 1;
+                            }
+                        }
+                    }
+                    rays.fetch_add(c.rays, Ordering::Relaxed);
+                    bad.fetch_add(c.bad, Ordering::Relaxed);
+                    (progress.done)(1);
+                    out
+                })
+                .collect();
+            for list in &splats {
+                for &(px, v) in list {
+                    acc[px as usize] += v.as_dvec3();
+                }
+            }
+            start = end;
+        }
+        for (p, a) in img.data.iter_mut().zip(acc) {
+            *p = a.as_vec3();
+        }
+    }
+
+    /// One light path; returns the pixel it lands in and its (MIS-weighted) contribution.
+    fn light_path(&self, rng: &mut Rng, c: &mut Counters) -> Option<(u32, Vec3)> {
+        let s = self.sampler.as_ref()?;
+        let (ul, ut, up) = (rng.f32(), rng.f32(), rng.vec2());
+        let rs = s.sample(ul, ut, up)?;
+        let light = &self.scene.lights[rs.light];
+        let y_pos = self.scene.mesh.point(rs.tri, rs.u, rs.v);
+        let inc = light.incident(y_pos)?;
+        let yp = SurfacePoint::at(self.scene, rs.tri, rs.u, rs.v, inc.wi)?;
+        let wl = yp.frame.to_local(inc.wi);
+        if wl.z <= 0.0 {
+            return None;
+        }
+        let ybrdf = self.scene.tri_material(rs.tri);
+        let w_out_l = ybrdf.sample(wl, rng.arr3())?;
+        let pdf_bsdf_y = ybrdf.pdf(wl, w_out_l);
+        let w_out = yp.frame.to_world(w_out_l);
+        if !(pdf_bsdf_y > 0.0) || w_out_l.z <= 0.0 || yp.ng.dot(w_out) <= 0.0 {
+            return None;
+        }
+        let lr = ybrdf.eval(w_out_l, wl) * wl.z * inc.irradiance;
+        if lr == Vec3::ZERO {
+            return None;
+        }
+        c.rays += 1;
+        let tmax = if inc.dist.is_finite() {
+            inc.dist * (1.0 - 1e-5) - self.eps
+        } else {
+            f32::INFINITY
+        };
+        if !self
+            .accel
+            .unoccluded(yp.offset(self.eps), inc.wi, 0.0, tmax)
+        {
+            return None;
+        }
+        c.rays += 1;
+        let hit = self
+            .accel
+            .intersect(yp.offset(self.eps), w_out, 0.0, f32::INFINITY)?;
+        if !self.scene.tri_object(hit.tri).receiver {
+            return None;
+        }
+        let xp = SurfacePoint::from_hit(self.scene, &hit, -w_out)?;
+        // Connect x to the camera.
+        let to_cam = self.camera.position - xp.p;
+        let r = to_cam.length();
+        if !(r > 0.0) {
+            return None;
+        }
+        let wc = to_cam / r;
+        if xp.ng.dot(wc) <= 0.0 {
+            return None;
+        }
+        let (px, py) = self.project(-wc)?;
+        let xbrdf = self.scene.tri_material(hit.tri);
+        let wo_l = xp.frame.to_local(wc);
+        let wi_l = xp.frame.to_local(-w_out);
+        if wo_l.z <= 0.0 || wi_l.z <= 0.0 {
+            return None;
+        }
+        let f = xbrdf.eval(wo_l, wi_l) * wi_l.z;
+        if f == Vec3::ZERO {
+            return None;
+        }
+        c.rays += 1;
+        if !self
+            .accel
+            .unoccluded(xp.offset(self.eps), wc, 0.0, r * (1.0 - 1e-5))
+        {
+            return None;
+        }
+        let d = self.mis_denominator(&PathTerms {
+            pdf_bsdf_x: xbrdf.pdf(wo_l, wi_l),
+            pdf_area_y: rs.pdf_area,
+            pdf_bsdf_y,
+            dist2: hit.t * hit.t,
+            cos_y: yp.ng.dot(w_out).abs(),
+            cos_x: xp.ng.dot(w_out).abs(),
+            pdf_camera_x: self.pdf_camera(&xp, wc, r),
+        });
+        if !(d > 0.0) {
+            return None;
+        }
+        Some((py * self.opts.width + px, f * lr / d))
+    }
+
+    /// Pixel hit by the camera ray along unit `dir` (from the camera), if inside the image.
+    fn project(&self, dir: Vec3) -> Option<(u32, u32)> {
+        let cam = &self.camera;
+        let z = dir.dot(cam.forward);
+        if !(z > 0.0) {
+            return None;
+        }
+        let aspect = self.opts.width as f32 / self.opts.height as f32;
+        let sx = dir.dot(cam.right) / z / (self.tan_half * aspect);
+        let sy = dir.dot(cam.up) / z / self.tan_half;
+        let fx = (sx + 1.0) * 0.5 * self.opts.width as f32;
+        let fy = (1.0 - sy) * 0.5 * self.opts.height as f32;
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return None;
+        }
+        let (px, py) = (fx as u32, fy as u32);
+        (px < self.opts.width && py < self.opts.height).then_some((px, py))
+    }
 }
+
+/// Key of the light-tracing random streams (camera streams use the pixel index there).
+const LIGHT_STREAM: u64 = u64::MAX;
 
 /// A progress sink that ignores everything (library use, tests).
 pub fn no_progress(_: u64) {}
@@ -294,7 +580,7 @@ pub fn no_progress(_: u64) {}
 pub fn render_quiet(scene: &Scene, accel: &Accel, opts: &RenderOptions) -> (Image, RenderStats) {
     let cancel = AtomicBool::new(false);
     let p = Progress {
-        rows_done: &no_progress,
+        done: &no_progress,
         cancel: &cancel,
     };
     render(scene, accel, opts, &p).expect("not cancelled")
