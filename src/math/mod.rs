@@ -3,6 +3,7 @@
 
 pub mod frame;
 pub mod sampling;
+pub mod sg;
 
 pub use frame::Frame;
 pub use sampling::Rng;
