@@ -111,6 +111,84 @@ fn point_light_over_plane_matches_closed_form() {
     assert_eq!(checked, 48 * 48);
 }
 
+/// Directional and spot lights over the same plane: L = ρ/π · E cos θ for the directional light;
+/// L = ρ/π · I · falloff · cos θ / d² for the spot, whose smoothstep falloff region crosses the
+/// image. Same per-pixel tolerance as above (spread of the closed form over the footprint; the
+/// spot's falloff edge makes that spread large only on the few pixels it crosses).
+#[test]
+fn directional_and_spot_lights_over_plane_match_closed_form() {
+    let dir = DVec3::new(0.3, -1.0, 0.2).normalize();
+    let directional = POINT_OVER_PLANE.replace(
+        "type = \"point\"\nposition = [0.3, 1.0, -0.2]\nintensity = [2.0, 1.0, 0.5]",
+        "type = \"directional\"\ndirection = [0.3, -1.0, 0.2]\nirradiance = [2.0, 1.0, 0.5]",
+    );
+    let spot = POINT_OVER_PLANE.replace(
+        "type = \"point\"\nposition = [0.3, 1.0, -0.2]\nintensity = [2.0, 1.0, 0.5]",
+        "type = \"spot\"\nposition = [0.3, 1.0, -0.2]\ndirection = [0.0, -1.0, 0.0]\nintensity = [2.0, 1.0, 0.5]\ncone_angle = 50.0\nfalloff_angle = 30.0",
+    );
+    assert_ne!(directional, POINT_OVER_PLANE);
+    assert_ne!(spot, POINT_OVER_PLANE);
+    let light = DVec3::new(0.3, 1.0, -0.2);
+    let (c50, c30) = (50f64.to_radians().cos(), 30f64.to_radians().cos());
+    let cases: [(&str, Box<dyn Fn(Vec3) -> DVec3>); 2] = [
+        (
+            directional.as_str(),
+            Box::new(move |_p: Vec3| 0.5 / PI * DVec3::new(2.0, 1.0, 0.5) * (-dir.y)),
+        ),
+        (
+            spot.as_str(),
+            Box::new(move |p: Vec3| {
+                let d = light - p.as_dvec3();
+                let d2 = d.length_squared();
+                let cos_axis = d.y / d2.sqrt();
+                let t = ((cos_axis - c50) / (c30 - c50)).clamp(0.0, 1.0);
+                let fall = t * t * (3.0 - 2.0 * t);
+                0.5 / PI * DVec3::new(2.0, 1.0, 0.5) * fall * cos_axis / d2
+            }),
+        ),
+    ];
+    for (text, radiance) in cases {
+        let scene = load(text);
+        let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+        let (img, _) = render_quiet(&scene, &accel, &opts(&scene, 16, true, false));
+        let mut lit = 0;
+        for py in 0..img.height {
+            for px in 0..img.width {
+                let at = |dx: f32, dy: f32| {
+                    radiance(on_plane(
+                        &scene,
+                        px as f32 + dx,
+                        py as f32 + dy,
+                        Vec3::Y,
+                        0.0,
+                    ))
+                };
+                let centre = at(0.5, 0.5);
+                let mut lo = DVec3::splat(f64::INFINITY);
+                let mut hi = DVec3::splat(f64::NEG_INFINITY);
+                for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)] {
+                    lo = lo.min(at(dx, dy));
+                    hi = hi.max(at(dx, dy));
+                }
+                let got = img.get(px, py).as_dvec3();
+                for c in 0..3 {
+                    let tol = (hi[c] - lo[c]) + 1e-5 * centre[c] + 1e-9;
+                    assert!(
+                        (got[c] - centre[c]).abs() <= tol,
+                        "pixel ({px},{py}) channel {c}: got {} expected {} ± {tol}",
+                        got[c],
+                        centre[c]
+                    );
+                }
+                if centre.x > 0.0 {
+                    lit += 1;
+                }
+            }
+        }
+        assert!(lit > 100, "the light must reach the plane");
+    }
+}
+
 const TWO_SQUARES: &str = r#"
 [camera]
 position = [3.0, 0.5, 0.5]
