@@ -111,6 +111,9 @@ fn point_light_over_plane_matches_closed_form() {
     assert_eq!(checked, 48 * 48);
 }
 
+/// Closed-form radiance at a point of the plane.
+type Radiance = Box<dyn Fn(Vec3) -> DVec3>;
+
 /// Directional and spot lights over the same plane: L = ρ/π · E cos θ for the directional light;
 /// L = ρ/π · I · falloff · cos θ / d² for the spot, whose smoothstep falloff region crosses the
 /// image. Same per-pixel tolerance as above (spread of the closed form over the footprint; the
@@ -130,7 +133,7 @@ fn directional_and_spot_lights_over_plane_match_closed_form() {
     assert_ne!(spot, POINT_OVER_PLANE);
     let light = DVec3::new(0.3, 1.0, -0.2);
     let (c50, c30) = (50f64.to_radians().cos(), 30f64.to_radians().cos());
-    let cases: [(&str, Box<dyn Fn(Vec3) -> DVec3>); 2] = [
+    let cases: [(&str, Radiance); 2] = [
         (
             directional.as_str(),
             Box::new(move |_p: Vec3| 0.5 / PI * DVec3::new(2.0, 1.0, 0.5) * (-dir.y)),
