@@ -3,6 +3,7 @@
 use anyhow::{Context, bail};
 use interreflect::compare::{ErrorMapOptions, Metrics, error_map, metrics};
 use interreflect::image::{read_exr, write_png_rgb8};
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -59,24 +60,30 @@ pub fn run(args: CompareArgs) -> anyhow::Result<i32> {
     let test = read_exr(&args.test)?;
     let reference = read_exr(&args.reference)?;
     let m = metrics(&test, &reference)?;
+    let mut out = String::new();
     if args.json {
-        println!("{}", serde_json::to_string(&m)?);
+        outln!(out, "{}", serde_json::to_string(&m)?);
     } else {
-        println!("test:      {}", args.test.display());
-        println!("reference: {}", args.reference.display());
-        println!("RMSE      {:.6e}", m.rmse);
-        println!("rel_rmse  {:.6}  (RMSE / reference mean)", m.rel_rmse);
-        println!("relMSE    {:.6e}  (mean (x-y)^2 / (y^2 + 0.01))", m.relmse);
-        println!("SSIM      {:.6}", m.ssim);
-        println!("FLIP      {:.6}  (mean LDR FLIP)", m.flip);
+        outln!(out, "test:      {}", args.test.display());
+        outln!(out, "reference: {}", args.reference.display());
+        outln!(out, "RMSE      {:.6e}", m.rmse);
+        outln!(out, "rel_rmse  {:.6}  (RMSE / reference mean)", m.rel_rmse);
+        outln!(
+            out,
+            "relMSE    {:.6e}  (mean (x-y)^2 / (y^2 + 0.01))",
+            m.relmse
+        );
+        outln!(out, "SSIM      {:.6}", m.ssim);
+        outln!(out, "FLIP      {:.6}  (mean LDR FLIP)", m.flip);
     }
     if let Some(p) = &args.error_map {
         let (w, h, px) = error_map(&test, &reference, &ErrorMapOptions::default())?;
         write_png_rgb8(p, w, h, &px)?;
         if !args.json {
-            println!("error map: {}", p.display());
+            outln!(out, "error map: {}", p.display());
         }
     }
+    super::print_stdout(&out);
     let mut failed = false;
     for (k, v) in &thresholds {
         let x = value(&m, k);

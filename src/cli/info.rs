@@ -1,16 +1,19 @@
 //! `interreflect info`.
 
 use interreflect::scene::{Light, Scene};
+use std::fmt::Write as _;
 use std::path::Path;
 
 pub fn run(path: &Path) -> anyhow::Result<i32> {
     let scene = Scene::load(path)?;
+    let mut out = String::new();
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
     let c = &scene.camera;
-    println!("scene {} ({})", scene.name, scene.path.display());
-    println!(
+    outln!(out, "scene {} ({})", scene.name, scene.path.display());
+    outln!(
+        out,
         "camera: position {:?}, forward {:?}, vertical fov {:.1}°, {}x{}",
         c.position.to_array(),
         c.forward.to_array(),
@@ -18,7 +21,11 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
         c.width,
         c.height
     );
-    println!("objects ({} triangles in all):", scene.mesh.indices.len());
+    outln!(
+        out,
+        "objects ({} triangles in all):",
+        scene.mesh.indices.len()
+    );
     for o in &scene.objects {
         let tris = &scene.mesh.indices[o.first_tri as usize..(o.first_tri + o.tri_count) as usize];
         let mut lo = glam::Vec3::splat(f32::INFINITY);
@@ -31,7 +38,8 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
             }
             area += 0.5 * scene.mesh.tri_cross(o.first_tri + k as u32).length() as f64;
         }
-        println!(
+        outln!(
+            out,
             "  {:<12} {:>9} triangles  area {:>9.4}  bounds {:?} .. {:?}  material {}  {}{}  [{}]",
             o.name,
             o.tri_count,
@@ -45,14 +53,20 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
         );
     }
     let (lo, hi) = scene.mesh.bounds();
-    println!("scene bounds: {:?} .. {:?}", lo.to_array(), hi.to_array());
-    println!("lights:");
+    outln!(
+        out,
+        "scene bounds: {:?} .. {:?}",
+        lo.to_array(),
+        hi.to_array()
+    );
+    outln!(out, "lights:");
     for (i, l) in scene.lights.iter().enumerate() {
         match l {
             Light::Point {
                 position,
                 intensity,
-            } => println!(
+            } => outln!(
+                out,
                 "  [{i}] point at {:?}, intensity {:?} W/sr",
                 position.to_array(),
                 intensity.to_array()
@@ -63,7 +77,8 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
                 intensity,
                 cos_cone,
                 cos_falloff,
-            } => println!(
+            } => outln!(
+                out,
                 "  [{i}] spot at {:?} towards {:?}, intensity {:?} W/sr, cone {:.1}°, falloff from {:.1}°",
                 position.to_array(),
                 direction.to_array(),
@@ -74,18 +89,20 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
             Light::Directional {
                 direction,
                 irradiance,
-            } => println!(
+            } => outln!(
+                out,
                 "  [{i}] directional along {:?}, irradiance {:?} W/m²",
                 direction.to_array(),
                 irradiance.to_array()
             ),
         }
     }
-    println!("materials:");
+    outln!(out, "materials:");
     for m in &scene.materials {
-        println!("  {:<12} {:?}", m.name, m.brdf);
+        outln!(out, "  {:<12} {:?}", m.name, m.brdf);
     }
-    println!(
+    outln!(
+        out,
         "render defaults: spp {}, seed {}; reference: {} BRDF sample(s), {} reflector sample(s) and {} light path(s) per camera sample",
         scene.settings.spp,
         scene.settings.seed,
@@ -93,5 +110,6 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
         scene.settings.reference.reflector_samples,
         scene.settings.reference.light_paths
     );
+    super::print_stdout(&out);
     Ok(0)
 }

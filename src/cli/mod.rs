@@ -1,6 +1,13 @@
 //! Command-line interface (clap). Exit codes: 0 success, 1 a `compare --fail-above` threshold
 //! was exceeded, 2 any error (bad input, I/O), 130 interrupted.
 
+/// `writeln!` into a `String` (which cannot fail).
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        let _ = writeln!($($t)*);
+    }};
+}
+
 mod compare;
 mod info;
 mod progress;
@@ -33,6 +40,14 @@ pub enum Command {
     },
     /// Convert a mesh (PLY, PLY.gz, OBJ, glTF/GLB) to the compact binary PLY.gz used in scenes/.
     ConvertMesh { input: PathBuf, output: PathBuf },
+}
+
+/// Writes `text` to standard output; a closed pipe (`interreflect info ... | head`) is not an
+/// error.
+pub fn print_stdout(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<i32> {
