@@ -2,6 +2,7 @@
 //! was exceeded, 2 any error (bad input, I/O), 130 interrupted.
 
 mod compare;
+mod fit;
 mod info;
 mod progress;
 mod render;
@@ -33,6 +34,8 @@ pub enum Command {
     },
     /// Convert a mesh (PLY, PLY.gz, OBJ, glTF/GLB) to the compact binary PLY.gz used in scenes/.
     ConvertMesh { input: PathBuf, output: PathBuf },
+    /// Fit spherical Gaussians to every BRDF model: lobes, relative L2 errors, report and plots.
+    Fit(fit::FitArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<i32> {
@@ -48,5 +51,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             eprintln!("wrote {}", output.display());
             Ok(0)
         }
+        Command::Fit(a) => fit::run(a),
     }
 }
