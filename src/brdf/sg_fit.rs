@@ -11,7 +11,8 @@
 //! - Microfacet models: the NDF is an SG (or a sum of SGs for GGX) in the half-vector domain
 //!   around the normal, D(h) ≈ Σ_k μ_k exp(λ_k (h·n − 1)):
 //!   Blinn-Phong λ = n, μ = (n+2)/(2π); Beckmann (Ward and Cook-Torrance) λ = 2/α²,
-//!   μ = 1/(π α²); GGX K ∈ 1..=4 lobes fitted by least squares and tabulated over α
+//!   μ = 1/(π α²); GGX K ∈ 1..=4 lobes fitted by energy-preserving least squares and
+//!   tabulated over α
 //!   ([`ggx`], `ggx_table.rs`). The lobes are warped into the wi domain about wo (spherical warp
 //!   of Wang et al. 2009): axis r = 2 (wo·n) n − wo, sharpness λ / (4 |wo·n|), and the remaining
 //!   factors of the BRDF (Fresnel, masking-shadowing, 1/(4 cos θi cos θo), ks) are evaluated once
@@ -45,9 +46,10 @@ pub use quadrature::integrate_hemisphere;
 pub const MAX_LOBES: usize = 4;
 
 /// Number of SG lobes used for the GGX NDF by [`warped_lobes`]: the relative L2 error of the
-/// NDF fit is ≤ 15.1 % with 1 lobe, 3.4 % with 2, 0.93 % with 3 and 0.29 % with 4 over the
-/// table's α ∈ [1e-3, 1]; with 3 lobes it is well below the other errors of the warped fit at
-/// every view angle (see `results/brdf-fits.md`). Use [`warped_lobes_k`] to choose.
+/// (energy-preserving) NDF fit is ≤ 23.3 % with 1 lobe, 4.5 % with 2, 1.2 % with 3 and 0.36 %
+/// with 4 over the table's α ∈ [1e-3, 1]; with 3 lobes it is well below the other errors of
+/// the warped fit at every view angle (see `results/brdf-fits.md`). Use [`warped_lobes_k`] to
+/// choose.
 pub const GGX_DEFAULT_LOBES: usize = 3;
 
 /// An SG lobe of an NDF (in the half-vector domain, axis n) or of the Phong lobe (axis r),

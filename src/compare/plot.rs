@@ -419,7 +419,8 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
         put(&mut cv, area.x1 as i64, y, INK);
     }
 
-    // Curves.
+    // Curves (their pixel positions are kept for the legend placement).
+    let mut drawn: Vec<(f64, f64)> = Vec::new();
     for sr in &plot.series {
         let mut run = 0.0;
         let mut prev: Option<(f64, f64)> = None;
@@ -435,6 +436,7 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
                 y.clamp(ylo - (yhi - ylo), yhi + (yhi - ylo))
             };
             let p = (px(x), py(yc));
+            drawn.push(p);
             if let Some(q) = prev {
                 let dash = if sr.dashed { Some(&mut run) } else { None };
                 line(&mut cv, area, q, p, sr.color, dash);
@@ -460,7 +462,9 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
     let yc = ((area.y0 + area.y1) / 2.0) as i64;
     draw_text_vertical(&mut cv, 6, yc - yw / 2, &plot.y_label, s, INK);
 
-    // Legend: top-right inside the plotting area, on a white box.
+    // Legend: inside the plotting area on a white box, in the corner (top-right, top-left,
+    // bottom-right, bottom-left, in this order of preference) that hides the fewest curve
+    // points.
     let labelled: Vec<&Series> = plot.series.iter().filter(|s| !s.label.is_empty()).collect();
     if !labelled.is_empty() {
         let row_h = ch + 6;
@@ -473,8 +477,25 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
             + swatch
             + 24;
         let lh = labelled.len() * row_h + 10;
-        let lx = area.x1 as i64 - lw as i64 - 8;
-        let ly = area.y0 as i64 + 8;
+        let right = area.x1 as i64 - lw as i64 - 8;
+        let left = area.x0 as i64 + 8;
+        let top = area.y0 as i64 + 8;
+        let bottom = area.y1 as i64 - lh as i64 - 8;
+        let hidden = |x: i64, y: i64| {
+            drawn
+                .iter()
+                .filter(|p| {
+                    p.0 >= x as f64
+                        && p.0 <= (x + lw as i64) as f64
+                        && p.1 >= y as f64
+                        && p.1 <= (y + lh as i64) as f64
+                })
+                .count()
+        };
+        let (lx, ly) = [(right, top), (left, top), (right, bottom), (left, bottom)]
+            .into_iter()
+            .min_by_key(|&(x, y)| hidden(x, y))
+            .unwrap_or((right, top));
         for y in ly..ly + lh as i64 {
             for x in lx..lx + lw as i64 {
                 let edge = y == ly || y == ly + lh as i64 - 1 || x == lx || x == lx + lw as i64 - 1;
@@ -549,20 +570,31 @@ mod tests {
                     label: "exact".into(),
                     color: PALETTE[0],
                     dashed: false,
-                    points: xs.iter().map(|&x| (x, (-(x / 30.0).powi(2)).exp())).collect(),
+                    points: xs
+                        .iter()
+                        .map(|&x| (x, (-(x / 30.0).powi(2)).exp()))
+                        .collect(),
                 },
                 Series {
                     label: "SG".into(),
                     color: PALETTE[1],
                     dashed: true,
-                    points: xs.iter().map(|&x| (x, (-(x / 35.0).powi(2)).exp())).collect(),
+                    points: xs
+                        .iter()
+                        .map(|&x| (x, (-(x / 35.0).powi(2)).exp()))
+                        .collect(),
                 },
             ],
             ..Plot::default()
         }
     }
 
-    fn count(r: &Raster, x: std::ops::Range<usize>, y: std::ops::Range<usize>, c: [u8; 3]) -> usize {
+    fn count(
+        r: &Raster,
+        x: std::ops::Range<usize>,
+        y: std::ops::Range<usize>,
+        c: [u8; 3],
+    ) -> usize {
         let mut n = 0;
         for yy in y {
             for xx in x.clone() {
@@ -608,11 +640,17 @@ mod tests {
         let t = linear_ticks(0.0, 1.0);
         let want = [0.0, 0.2, 0.4, 0.6, 0.8, 1.0];
         assert_eq!(t.len(), want.len());
-        assert!(t.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12), "{t:?}");
+        assert!(
+            t.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12),
+            "{t:?}"
+        );
         assert_eq!(tick_label(1e-3, true), "1e-3");
         assert_eq!(tick_label(45.0, false), "45");
         assert_eq!(tick_label(0.25, false), "0.25");
-        let s = hstack(&[render(&sample_plot(false), 100, 80), render(&sample_plot(true), 120, 80)]);
+        let s = hstack(&[
+            render(&sample_plot(false), 100, 80),
+            render(&sample_plot(true), 120, 80),
+        ]);
         assert_eq!((s.width, s.height, s.pixels.len()), (220, 80, 220 * 80));
     }
 }

@@ -204,7 +204,9 @@ pub fn sweep() -> Vec<FitRow> {
             }
         }
     }
-    jobs.par_iter().map(|&(f, k, p, t)| row(f, p, t, k)).collect()
+    jobs.par_iter()
+        .map(|&(f, k, p, t)| row(f, p, t, k))
+        .collect()
 }
 
 /// A slice in the plane of incidence: wo = [`view_dir`]`(theta_o_deg)`,
