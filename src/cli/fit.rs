@@ -243,8 +243,9 @@ fn markdown(rows: &[FitRow], plots: &[(String, String)], secs: f64) -> String {
     let _ = writeln!(
         s,
         "Relative L2 error sqrt(∫ (D − D_SG)² cos θh dωh / ∫ D² cos θh dωh) of the tabulated \
-         K-lobe least-squares fits (`src/brdf/sg_fit/ggx_table.rs`, interpolated at these α), \
-         and the normalised lobes c_k = λ_k α², m_k = μ_k π α²:\n"
+         K-lobe energy-preserving least-squares fits (`src/brdf/sg_fit/ggx_table.rs`, \
+         interpolated at these α; ∫ D_SG cos θh dωh = 1 over the hemisphere of h), and the \
+         normalised lobes c_k = λ_k α², m_k = μ_k π α²:\n"
     );
     let _ = writeln!(
         s,
@@ -311,11 +312,14 @@ fn markdown(rows: &[FitRow], plots: &[(String, String)], secs: f64) -> String {
 const PANEL_W: u32 = 560;
 const PANEL_H: u32 = 420;
 
-/// One slice panel: `brdfs` (label, BRDF, GGX lobes) at θo, exact solid vs SG dashed.
+/// One slice panel: `brdfs` (label, BRDF, GGX lobes) at θo, exact solid vs SG dashed. With
+/// `shared_exact` all entries are the same BRDF (differing in the lobe count): its exact curve
+/// is drawn once, in black.
 fn slice_panel(
     title: &str,
     theta_o: f32,
     brdfs: &[(String, interreflect::brdf::Brdf, usize)],
+    shared_exact: bool,
 ) -> plot::Raster {
     let mut series = Vec::new();
     let mut ymax: f64 = 0.0;
@@ -323,12 +327,18 @@ fn slice_panel(
         let (th, exact, sg) = report::plane_slice(brdf, theta_o, *k, 1441);
         ymax = exact.iter().chain(&sg).fold(ymax, |a, &b| a.max(b));
         let colour = PALETTE[i % PALETTE.len()];
-        series.push(Series {
-            label: format!("{label} exact"),
-            color: colour,
-            dashed: false,
-            points: th.iter().copied().zip(exact).collect(),
-        });
+        if !shared_exact || i == 0 {
+            series.push(Series {
+                label: if shared_exact {
+                    "exact".to_string()
+                } else {
+                    format!("{label} exact")
+                },
+                color: if shared_exact { PALETTE[6] } else { colour },
+                dashed: false,
+                points: th.iter().copied().zip(exact).collect(),
+            });
+        }
         series.push(Series {
             label: format!("{label} SG"),
             color: colour,
@@ -379,7 +389,7 @@ fn write_plots(dir: &Path) -> anyhow::Result<Vec<(String, String)>> {
             .collect();
         let panels: Vec<plot::Raster> = THETA_O_DEG
             .iter()
-            .map(|&t| slice_panel(title, t, &brdfs))
+            .map(|&t| slice_panel(title, t, &brdfs, false))
             .collect();
         let caption = if f.is_ggx() {
             format!(
@@ -397,7 +407,7 @@ fn write_plots(dir: &Path) -> anyhow::Result<Vec<(String, String)>> {
         .collect();
     let panels: Vec<plot::Raster> = THETA_O_DEG
         .iter()
-        .map(|&t| slice_panel("CT GGX α=0.2", t, &brdfs))
+        .map(|&t| slice_panel("CT GGX α=0.2", t, &brdfs, true))
         .collect();
     save(
         "ct-ggx-lobes.png",
