@@ -16,6 +16,7 @@
 
 pub mod microfacet;
 pub mod models;
+pub mod sg_fit;
 mod validate;
 
 #[cfg(test)]

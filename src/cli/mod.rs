@@ -9,6 +9,7 @@ macro_rules! outln {
 }
 
 mod compare;
+mod fit;
 mod info;
 mod progress;
 mod render;
@@ -40,6 +41,8 @@ pub enum Command {
     },
     /// Convert a mesh (PLY, PLY.gz, OBJ, glTF/GLB) to the compact binary PLY.gz used in scenes/.
     ConvertMesh { input: PathBuf, output: PathBuf },
+    /// Fit spherical Gaussians to every BRDF model: lobes, relative L2 errors, report and plots.
+    Fit(fit::FitArgs),
 }
 
 /// Writes `text` to standard output; a closed pipe (`interreflect info ... | head`) is not an
@@ -63,5 +66,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             eprintln!("wrote {}", output.display());
             Ok(0)
         }
+        Command::Fit(a) => fit::run(a),
     }
 }

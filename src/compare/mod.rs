@@ -7,6 +7,7 @@
 mod colormap;
 mod errormap;
 mod font;
+pub mod plot;
 mod ssim;
 
 pub use colormap::{MAGMA, magma};
