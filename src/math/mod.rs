@@ -4,6 +4,7 @@
 pub mod frame;
 pub mod sampling;
 pub mod sg;
+pub mod spherical_triangle;
 
 pub use frame::Frame;
 pub use sampling::Rng;

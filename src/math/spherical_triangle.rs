@@ -1,0 +1,550 @@
+//! Spherical triangles: solid angle and the integral of a spherical Gaussian over a triangle.
+//!
+//! [`integrate_sg`] computes ∫_{ABC} exp(λ (ω·p − 1)) dω by the scheme of Xu et al., "A
+//! Practical Algorithm for Rendering Interreflections with All-Frequency BRDFs" (TOG 2014, §5):
+//!
+//! 1. Signed decomposition around P = p: Ω_ABC = Ω_PAB + Ω_PBC + Ω_PCA, each edge triangle
+//!    carrying the sign of det(P, X, Y). In polar coordinates (θ, φ) around P the edge triangle
+//!    PXY is {φ between the azimuths of X and Y, θ < θ_e(φ)}, θ_e(φ) on the edge's great circle.
+//! 2. Closed-form radial part: ∫_{cos θ_e}^1 e^{λ (t − 1)} dt = h(x_e) with x = 1 − cos θ and
+//!    h(x) = (1 − e^{−λ x}) / λ = −expm1(−λ x) / λ (→ x at λ → 0), leaving a 1-D integral over
+//!    the azimuth per edge.
+//! 3. Along an edge, with ψ the azimuth measured from the foot F of the perpendicular from P to
+//!    the edge's great circle and θ0 = ∠(P, F): cos θ_e(ψ) = cos θ0 cos ψ / √(1 − cos²θ0 sin²ψ),
+//!    i.e. cos ψ / √(cos²ψ + tan²θ0).
+//! 4. When −P lies inside ABC the edge triangles wrap around: their signed sum is −(sphere ∖
+//!    ABC), so the lobe's sphere integral is added. In general the correction is the lobe
+//!    integral times −W / 2π, W = Σ signed edge azimuth spans (W = 2π if P is inside, −2π if −P
+//!    is inside, 0 otherwise, ±π / ±α on the boundary), which is exact also when −P lies on an
+//!    edge or a vertex.
+//!
+//! The 1-D azimuthal integral has two implementations: the paper's piecewise-linear one
+//! ([`Scheme::PiecewiseLinear`]: h interpolated linearly in cos θ, every piece integrated
+//! exactly with ∫ cos θ_e dψ = asin(cos θ0 sin ψ)) and Gauss-Legendre quadrature in ψ
+//! ([`Scheme::GaussLegendre`]). Both split the azimuth range adaptively from λ and the edge's
+//! extent. [`integrate_sg`] uses the faster one at the tested accuracy (see
+//! `results/sg-core.md`). All internal arithmetic is f64. Derivations: `docs/sg-math.md`.
+
+use std::f64::consts::{PI, TAU};
+
+use glam::{DVec3, Vec3};
+
+use super::sg::lobe_integral_f64;
+
+/// How the 1-D azimuthal integral of [`integrate_sg_scheme`] is evaluated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scheme {
+    /// The paper's scheme: h(x) interpolated linearly in x = 1 − cos θ between knots spaced in
+    /// y = λ x by `step` (grown with the distance from the edge's smallest y, see
+    /// `docs/sg-math.md`); each piece is integrated exactly over ψ.
+    PiecewiseLinear { step: f64 },
+    /// Gauss-Legendre quadrature in ψ of the given order (2..=8), on pieces split in y = λ x and
+    /// graded towards ψ = π/2 where the edge's θ_e(ψ) turns fast.
+    GaussLegendre { order: usize },
+}
+
+/// The scheme [`integrate_sg`] uses.
+pub const DEFAULT_SCHEME: Scheme = Scheme::GaussLegendre { order: GL_DEFAULT_ORDER };
+/// The order [`integrate_sg_gauss_legendre`] uses.
+pub const GL_DEFAULT_ORDER: usize = 5;
+/// The knot step [`integrate_sg_piecewise_linear`] uses.
+pub const PL_DEFAULT_STEP: f64 = 0.05;
+
+/// Below this |P × X| a vertex X counts as exactly ±P (azimuth undefined; the edge triangle
+/// has zero area or is a degenerate lune, handled by the winding correction).
+const COINCIDENT: f64 = 1e-10;
+
+/// Normalised f64 copy; None for zero or non-finite vectors.
+#[inline]
+fn unit(v: Vec3) -> Option<DVec3> {
+    let d = v.as_dvec3();
+    let l = d.length();
+    if l > 0.0 && l.is_finite() {
+        Some(d / l)
+    } else {
+        None
+    }
+}
+
+/// Solid angle of the spherical triangle with unit vertices a, b, c (f64), by Van Oosterom &
+/// Strackee, "The Solid Angle of a Plane Triangle" (IEEE TBME 1983):
+/// tan(Ω / 2) = |a·(b × c)| / (1 + a·b + b·c + c·a). In [0, 2π].
+#[inline]
+pub fn solid_angle_f64(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let det = a.dot(b.cross(c));
+    let den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+    2.0 * det.abs().atan2(den)
+}
+
+/// Solid angle of the spherical triangle with vertex directions a, b, c (normalised here; any
+/// winding): 2 atan2(|a·(b × c)|, 1 + a·b + b·c + c·a) (Van Oosterom & Strackee 1983),
+/// computed in f64. 0 for zero or non-finite vertices; never NaN.
+pub fn solid_angle(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    match (unit(a), unit(b), unit(c)) {
+        (Some(a), Some(b), Some(c)) => solid_angle_f64(a, b, c) as f32,
+        _ => 0.0,
+    }
+}
+
+/// ∫_{ABC} exp(λ (ω·axis − 1)) dω over the spherical triangle with vertex directions a, b, c
+/// (normalised here; either winding), by the signed decomposition around the axis, the closed
+/// radial part (1 − e^{−λ (1 − cos θ_e)}) / λ and the 1-D azimuthal integral with
+/// [`DEFAULT_SCHEME`] (Xu et al. 2014, §5). Accuracy (tests): ≤ 1 % relative wherever the
+/// triangle holds ≥ 1 % of the lobe's integral 2π (1 − e^{−2λ}) / λ. λ = 0 gives the solid
+/// angle; the result is never NaN, never negative and never above the solid angle.
+pub fn integrate_sg(axis: Vec3, sharpness: f32, a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    integrate_sg_scheme(axis, sharpness, a, b, c, DEFAULT_SCHEME)
+}
+
+/// [`integrate_sg`] with the azimuthal integral by Gauss-Legendre quadrature of order
+/// [`GL_DEFAULT_ORDER`] on adaptively split pieces.
+pub fn integrate_sg_gauss_legendre(axis: Vec3, sharpness: f32, a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    integrate_sg_scheme(
+        axis,
+        sharpness,
+        a,
+        b,
+        c,
+        Scheme::GaussLegendre {
+            order: GL_DEFAULT_ORDER,
+        },
+    )
+}
+
+/// [`integrate_sg`] with the paper's piecewise-linear azimuthal integral (knot step
+/// [`PL_DEFAULT_STEP`]).
+pub fn integrate_sg_piecewise_linear(
+    axis: Vec3,
+    sharpness: f32,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+) -> f32 {
+    integrate_sg_scheme(
+        axis,
+        sharpness,
+        a,
+        b,
+        c,
+        Scheme::PiecewiseLinear {
+            step: PL_DEFAULT_STEP,
+        },
+    )
+}
+
+/// [`integrate_sg`] with an explicit [`Scheme`] (for measurements).
+pub fn integrate_sg_scheme(
+    axis: Vec3,
+    sharpness: f32,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    scheme: Scheme,
+) -> f32 {
+    let (Some(a), Some(b), Some(c)) = (unit(a), unit(b), unit(c)) else {
+        return 0.0;
+    };
+    let lam = if sharpness > 0.0 {
+        f64::from(sharpness.min(f32::MAX))
+    } else {
+        0.0
+    };
+    let Some(p) = unit(axis) else {
+        return if lam == 0.0 {
+            solid_angle_f64(a, b, c) as f32
+        } else {
+            0.0
+        };
+    };
+    integrate_sg_f64(p, lam, a, b, c, scheme) as f32
+}
+
+/// f64 core of [`integrate_sg_scheme`]: unit p, a, b, c; λ ≥ 0 finite.
+pub fn integrate_sg_f64(p: DVec3, lam: f64, a: DVec3, b: DVec3, c: DVec3, scheme: Scheme) -> f64 {
+    let omega = solid_angle_f64(a, b, c);
+    if !(omega > 0.0) {
+        return 0.0;
+    }
+    if lam == 0.0 {
+        return omega;
+    }
+    // Positive orientation: det(a, b, c) > 0.
+    let (b, c) = if a.dot(b.cross(c)) < 0.0 {
+        (c, b)
+    } else {
+        (b, c)
+    };
+    let mut sum = 0.0;
+    let mut wind = 0.0;
+    // Smallest x = 1 − cos θ over the triangle (vertices and edge feet), for the clamp.
+    let mut xmin = [a, b, c]
+        .iter()
+        .map(|v| 0.5 * (*v - p).length_squared())
+        .fold(f64::INFINITY, f64::min);
+    for (x, y) in [(a, b), (b, c), (c, a)] {
+        let e = edge_integral(p, lam, x, y, scheme);
+        sum += e.integral;
+        wind += e.dpsi;
+        xmin = xmin.min(e.xmin);
+    }
+    let lobe = lobe_integral_f64(lam);
+    // W / 2π: +1 with P inside, −1 with −P inside, fractions on the boundary.
+    let w = wind / TAU;
+    let frac = if w < -0.999_999 {
+        1.0
+    } else if w > -1e-6 {
+        0.0
+    } else {
+        -w
+    };
+    if w > 0.999_999 {
+        xmin = 0.0;
+    }
+    let result = sum + frac * lobe;
+    let upper = omega * (-lam * xmin).exp();
+    let lower = omega * (-2.0 * lam).exp();
+    if result.is_nan() {
+        return lower;
+    }
+    result.clamp(lower, upper)
+}
+
+struct EdgeResult {
+    /// Signed integral over the edge triangle PXY.
+    integral: f64,
+    /// Signed azimuth span of the edge seen from P.
+    dpsi: f64,
+    /// Smallest x = 1 − cos θ along the edge's arc (∞ when not computed).
+    xmin: f64,
+}
+
+const SKIP: EdgeResult = EdgeResult {
+    integral: 0.0,
+    dpsi: 0.0,
+    xmin: f64::INFINITY,
+};
+
+/// Geometry of one edge's great circle seen from P.
+#[derive(Clone, Copy)]
+struct EdgeFrame {
+    /// sin θ0 ≥ 0: distance of P from the edge's great circle.
+    s0: f64,
+    /// cos θ0 ≥ 0.
+    k: f64,
+    /// x0 = 1 − cos θ0, the smallest x on the great circle (at ψ = 0).
+    x0: f64,
+    lam: f64,
+}
+
+impl EdgeFrame {
+    /// x(ψ) = 1 − cos θ_e(ψ) for folded ψ ∈ [0, π], without cancellation:
+    /// cos θ_e = k cos ψ / √D, D = cos²ψ + s0² sin²ψ, and for cos θ_e ≥ 0
+    /// x = sin²θ_e / (1 + cos θ_e) = s0² / (D (1 + cos θ_e)).
+    #[inline]
+    fn x_of(&self, psi: f64) -> f64 {
+        let (s, c) = psi.sin_cos();
+        let d = c * c + self.s0 * self.s0 * s * s;
+        let sd = d.sqrt();
+        if !(sd > 0.0) {
+            return 1.0;
+        }
+        let ct = self.k * c / sd;
+        if ct >= 0.0 {
+            self.s0 * self.s0 / (d * (1.0 + ct))
+        } else {
+            1.0 - ct
+        }
+    }
+
+    /// Antiderivative of x(ψ): X(ψ) = ψ − asin(cos θ0 sin ψ) (from ∫ cos θ_e dψ =
+    /// asin(cos θ0 sin ψ)), as atan2(sin(ψ − α), cos(ψ − α)) with α = asin(k sin ψ),
+    /// sin(ψ − α) = sin ψ · s0² / (cos α + k cos ψ) for cos ψ ≥ 0: no cancellation for small
+    /// θ0 and ψ. ψ ∈ [0, π].
+    #[inline]
+    fn big_x(&self, psi: f64) -> f64 {
+        let (s, c) = psi.sin_cos();
+        let sd = (c * c + self.s0 * self.s0 * s * s).sqrt();
+        let diff = if c >= 0.0 {
+            let den = sd + self.k * c;
+            if den > 0.0 {
+                self.s0 * self.s0 / den
+            } else {
+                0.0
+            }
+        } else {
+            sd - self.k * c
+        };
+        (s * diff).atan2(c * sd + self.k * s * s)
+    }
+
+    /// Inverse of x(ψ) on [0, π]: ψ = atan2(√((x − x0)(2 − x − x0)), s0 (1 − x)).
+    #[inline]
+    fn psi_of(&self, x: f64) -> f64 {
+        let a = ((x - self.x0).max(0.0) * (2.0 - x - self.x0).max(0.0)).sqrt();
+        a.atan2(self.s0 * (1.0 - x))
+    }
+
+    /// Radial part h(x) = ∫_{1−x}^1 e^{λ (t − 1)} dt = −expm1(−λ x) / λ.
+    #[inline]
+    fn h(&self, x: f64) -> f64 {
+        -(-self.lam * x).exp_m1() / self.lam
+    }
+}
+
+/// The signed integral over the edge triangle P X Y and its signed azimuth span.
+fn edge_integral(p: DVec3, lam: f64, x: DVec3, y: DVec3, scheme: Scheme) -> EdgeResult {
+    let cx = p.cross(x);
+    let cy = p.cross(y);
+    if cx.length_squared() < COINCIDENT * COINCIDENT || cy.length_squared() < COINCIDENT * COINCIDENT
+    {
+        // X or Y at ±P: PXY has zero area (X = P) or lies along one meridian (X = −P).
+        return SKIP;
+    }
+    let n = x.cross(y);
+    let nlen = n.length();
+    // det(P, X, Y) = P·(X × Y); the azimuth span from the projections onto the tangent plane
+    // at P: sin-part det, cos-part (P × X)·(P × Y).
+    let det = p.dot(n);
+    if !(nlen > 0.0) || det == 0.0 {
+        // Degenerate edge or P on the edge's great circle: PXY has zero area.
+        return SKIP;
+    }
+    let dpsi = det.atan2(cx.dot(cy));
+    // Unit normal of the great circle on P's side; s0 = sin θ0 = P·m.
+    let m = n * (det.signum() / nlen);
+    let s0 = p.dot(m).clamp(0.0, 1.0);
+    // Tangent direction from P towards the foot F: the projection of −m, of length cos θ0.
+    let q = p * s0 - m;
+    let k = q.length();
+    let u = if k > 1e-300 {
+        q / k
+    } else {
+        // P is a pole of the great circle: θ_e = π/2 at every azimuth, any reference works.
+        let t = if p.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+        (t - p * p.dot(t)).normalize()
+    };
+    let v = p.cross(u);
+    let psi_x = x.dot(v).atan2(x.dot(u));
+    let psi_y = psi_x + dpsi;
+    let frame = EdgeFrame {
+        s0,
+        k,
+        x0: s0 * s0 / (1.0 + k),
+        lam,
+    };
+    let (lo, hi) = if psi_x <= psi_y {
+        (psi_x, psi_y)
+    } else {
+        (psi_y, psi_x)
+    };
+    // x(ψ) is even and 2π-periodic, increasing on [0, π]: split at the multiple of π inside.
+    let j = (lo / PI).ceil();
+    let mid = j * PI;
+    let mut total = 0.0;
+    let mut xmin = f64::INFINITY;
+    let mut piece = |a: f64, b: f64| {
+        let (fa, fb) = (fold(a), fold(b));
+        let (fa, fb) = if fa <= fb { (fa, fb) } else { (fb, fa) };
+        if fb > fa {
+            let (xa, xb) = (frame.x_of(fa), frame.x_of(fb));
+            xmin = xmin.min(xa);
+            total += match scheme {
+                Scheme::PiecewiseLinear { step } => pl_monotone(&frame, fa, fb, xa, xb, step),
+                Scheme::GaussLegendre { order } => gl_monotone(&frame, fa, fb, xa, xb, order),
+            };
+        }
+    };
+    if mid > lo && mid < hi {
+        piece(lo, mid);
+        piece(mid, hi);
+    } else {
+        piece(lo, hi);
+    }
+    EdgeResult {
+        integral: dpsi.signum() * total,
+        dpsi,
+        xmin,
+    }
+}
+
+/// Distance of ψ from the nearest multiple of 2π, in [0, π].
+#[inline]
+fn fold(t: f64) -> f64 {
+    (t - TAU * (t / TAU).round()).abs()
+}
+
+/// Knot offsets in y = λ x above a monotone piece's smallest y for Gauss-Legendre: the
+/// integrand's e^{−y} part varies by at most e^{2} on the first piece and the later pieces,
+/// weighted by e^{−d}, may grow. Past the last offset the integrand is constant to 1e-17.
+const GL_Y_OFFSETS: [f64; 7] = [2.0, 4.0, 7.0, 11.0, 17.0, 26.0, 40.0];
+
+/// Gauss-Legendre nodes (non-negative half) and weights on [−1, 1].
+fn gl_rule(order: usize) -> (&'static [f64], &'static [f64]) {
+    match order {
+        0..=2 => (&[0.577_350_269_189_625_8], &[1.0]),
+        3 => (&[0.0, 0.774_596_669_241_483_4], &[0.888_888_888_888_888_8, 0.555_555_555_555_555_7]),
+        4 => (
+            &[0.339_981_043_584_856_26, 0.861_136_311_594_052_6],
+            &[0.652_145_154_862_546_4, 0.347_854_845_137_453_57],
+        ),
+        5 => (
+            &[0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664],
+            &[0.568_888_888_888_888_7, 0.478_628_670_499_366_3, 0.236_926_885_056_189_28],
+        ),
+        6 | 7 => (
+            &[0.238_619_186_083_196_9, 0.661_209_386_466_264_5, 0.932_469_514_203_151_9],
+            &[0.467_913_934_572_691_04, 0.360_761_573_048_138_7, 0.171_324_492_379_170_27],
+        ),
+        _ => (
+            &[
+                0.183_434_642_495_649_78,
+                0.525_532_409_916_329,
+                0.796_666_477_413_626_7,
+                0.960_289_856_497_536_2,
+            ],
+            &[
+                0.362_683_783_378_361_66,
+                0.313_706_645_877_886_9,
+                0.222_381_034_453_374_43,
+                0.101_228_536_290_377_06,
+            ],
+        ),
+    }
+}
+
+/// One Gauss-Legendre piece ∫_{a}^{b} h(x(ψ)) dψ.
+#[inline]
+fn gl_piece(f: &EdgeFrame, a: f64, b: f64, nodes: &[f64], weights: &[f64]) -> f64 {
+    let half = 0.5 * (b - a);
+    let mid = 0.5 * (a + b);
+    let mut s = 0.0;
+    for (&t, &w) in nodes.iter().zip(weights) {
+        if t == 0.0 {
+            s += w * f.h(f.x_of(mid));
+        } else {
+            s += w * (f.h(f.x_of(mid - half * t)) + f.h(f.x_of(mid + half * t)));
+        }
+    }
+    s * half
+}
+
+/// Next knot in x for Gauss-Legendre, from x (current) towards xb: the y offsets of
+/// [`GL_Y_OFFSETS`] above `y_start`, and a geometric grading towards ψ = π/2 where, for a
+/// small s0, x(ψ) turns from ≈ 0 to ≈ 2 within |ψ − π/2| ≲ s0 (poles at ψ = π/2 ± i atanh s0):
+/// x grows at most ×4 below 1, 2 − x shrinks at most ×4 above 1.
+#[inline]
+fn gl_next_knot(f: &EdgeFrame, x: f64, xb: f64, y_start: f64, offset_idx: &mut usize) -> f64 {
+    let mut next = xb;
+    let y = f.lam * x;
+    while *offset_idx < GL_Y_OFFSETS.len() && y_start + GL_Y_OFFSETS[*offset_idx] <= y * (1.0 + 1e-12)
+    {
+        *offset_idx += 1;
+    }
+    if *offset_idx < GL_Y_OFFSETS.len() {
+        next = next.min((y_start + GL_Y_OFFSETS[*offset_idx]) / f.lam);
+    }
+    if f.s0 < 0.5 {
+        if x < 1.0 {
+            // Toward ψ = π/2 from below; stop grading below 1e-7 of the piece's end value.
+            next = next.min((4.0 * x).max(1e-7 * xb)).min(1.0);
+        } else {
+            let z = 2.0 - x;
+            let z_end = f.x0; // 2 − x(π)
+            let zn = 0.25 * z;
+            if zn > 2.0 * z_end && zn > 1e-7 {
+                next = next.min(2.0 - zn);
+            }
+        }
+    }
+    next
+}
+
+/// ∫ h(x(ψ)) dψ over [ψa, ψb] ⊂ [0, π] (x increasing) by Gauss-Legendre on adaptive pieces.
+fn gl_monotone(f: &EdgeFrame, pa: f64, pb: f64, xa: f64, xb: f64, order: usize) -> f64 {
+    let (nodes, weights) = gl_rule(order);
+    let y_start = f.lam * xa;
+    let mut idx = 0;
+    let mut total = 0.0;
+    let mut x = xa;
+    let mut psi = pa;
+    for _ in 0..64 {
+        let next = gl_next_knot(f, x, xb, y_start, &mut idx);
+        if next >= xb || !(next > x) {
+            total += gl_piece(f, psi, pb, nodes, weights);
+            return total;
+        }
+        let psi_next = f.psi_of(next).clamp(psi, pb);
+        total += gl_piece(f, psi, psi_next, nodes, weights);
+        x = next;
+        psi = psi_next;
+    }
+    total + gl_piece(f, psi, pb, nodes, weights)
+}
+
+/// e^{−y} and h = (1 − e^{−y}) / λ, each without cancellation.
+#[inline]
+fn exp_and_h(f: &EdgeFrame, x: f64) -> (f64, f64) {
+    let y = f.lam * x;
+    if y < 0.5 {
+        let em = (-y).exp_m1();
+        (1.0 + em, -em / f.lam)
+    } else {
+        let e = (-y).exp();
+        (e, (1.0 - e) / f.lam)
+    }
+}
+
+/// ∫ h(x(ψ)) dψ over [ψa, ψb] ⊂ [0, π] (x increasing) with h interpolated linearly in x
+/// between knots; each piece exactly: ∫ (h_i + s_i (x − x_i)) dψ = h_i Δψ + s_i (ΔX − x_i Δψ)
+/// with X(ψ) = ψ − asin(cos θ0 sin ψ) and the slope s_i = e^{−y_i} (1 − e^{−Δy}) / Δy.
+/// Knots: Δy = step · (√min(y, 1) + step) · e^{d/2}, d = y − y_start (the chord error
+/// Δy² e^{−y} / 8 relative to the edge's largest e^{−y}), and one last piece beyond d = 30.
+fn pl_monotone(f: &EdgeFrame, pa: f64, pb: f64, xa: f64, xb: f64, step: f64) -> f64 {
+    let y_start = f.lam * xa;
+    let y_end = f.lam * xb;
+    let (mut e_i, mut h_i) = exp_and_h(f, xa);
+    let mut x_i = xa;
+    let mut psi_i = pa;
+    let mut bx_i = f.big_x(pa);
+    let mut total = 0.0;
+    let mut y = y_start;
+    for _ in 0..4096 {
+        let d = y - y_start;
+        let mut y_next = if d > 30.0 {
+            y_end
+        } else {
+            y + step * (y.min(1.0).sqrt() + step) * (0.5 * d).exp()
+        };
+        let last = y_next >= y_end;
+        if last {
+            y_next = y_end;
+        }
+        let (x_n, psi_n) = if last { (xb, pb) } else {
+            let x_n = y_next / f.lam;
+            (x_n, f.psi_of(x_n).clamp(psi_i, pb))
+        };
+        let bx_n = f.big_x(psi_n);
+        let (e_n, h_n) = exp_and_h(f, x_n);
+        let dpsi = psi_n - psi_i;
+        let dy = f.lam * (x_n - x_i);
+        let slope = if dy > 1e-12 {
+            e_i * (-(-dy).exp_m1()) / dy
+        } else {
+            e_i
+        };
+        total += h_i * dpsi + slope * (bx_n - bx_i - x_i * dpsi);
+        if last {
+            return total;
+        }
+        (e_i, h_i, x_i, psi_i, bx_i, y) = (e_n, h_n, x_n, psi_n, bx_n, y_next);
+    }
+    total
+}
+
+#[cfg(test)]
+#[path = "quadrature_tests.rs"]
+pub(crate) mod quadrature;
+
+#[cfg(test)]
+#[path = "spherical_triangle_tests.rs"]
+mod tests;
