@@ -30,3 +30,4 @@ pub mod image;
 pub mod math;
 pub mod render;
 pub mod scene;
+pub mod transport;

@@ -128,7 +128,7 @@ fn markdown(rows: &[FitRow], plots: &[(String, String)], secs: f64) -> String {
     let _ = writeln!(s, "# Spherical-Gaussian fits of the BRDF models\n");
     let _ = writeln!(
         s,
-        "Produced by `CARGO_TARGET_DIR=/work/main/target cargo run --release -- fit` \
+        "Produced by `cargo run --release -- fit` \
          ({} fits in {secs:.1} s; `--json` prints the same rows as JSON). \
          Method, warp and error definition: `docs/sg-brdf-fits.md`; code: `src/brdf/sg_fit.rs`.\n",
         rows.len()

@@ -13,6 +13,7 @@ mod fit;
 mod info;
 mod progress;
 mod render;
+mod single_triangle;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -34,6 +35,9 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Compare a test image with a reference: RMSE, rel_rmse, relMSE, SSIM, FLIP.
     Compare(compare::CompareArgs),
+    /// Measure the SG transport of one reflector triangle against the exact integral over
+    /// materials from Lambertian to near-mirror; writes results/single-triangle.md.
+    SingleTriangle(single_triangle::SingleTriangleArgs),
     /// Describe a scene: triangles per object, bounds, lights, materials.
     Info {
         /// Scene file (TOML).
@@ -58,6 +62,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Render(a) => render::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Info { scene } => info::run(&scene),
+        Command::SingleTriangle(a) => single_triangle::run(a),
         Command::ConvertMesh { input, output } => {
             let report = interreflect::scene::mesh::convert(&input, &output)?;
             for w in &report.warnings {

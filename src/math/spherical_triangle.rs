@@ -44,7 +44,9 @@ pub enum Scheme {
 }
 
 /// The scheme [`integrate_sg`] uses.
-pub const DEFAULT_SCHEME: Scheme = Scheme::GaussLegendre { order: GL_DEFAULT_ORDER };
+pub const DEFAULT_SCHEME: Scheme = Scheme::GaussLegendre {
+    order: GL_DEFAULT_ORDER,
+};
 /// The order [`integrate_sg_gauss_legendre`] uses.
 pub const GL_DEFAULT_ORDER: usize = 5;
 /// The knot step [`integrate_sg_piecewise_linear`] uses.
@@ -113,13 +115,7 @@ pub fn integrate_sg_gauss_legendre(axis: Vec3, sharpness: f32, a: Vec3, b: Vec3,
 
 /// [`integrate_sg`] with the paper's piecewise-linear azimuthal integral (knot step
 /// [`PL_DEFAULT_STEP`]).
-pub fn integrate_sg_piecewise_linear(
-    axis: Vec3,
-    sharpness: f32,
-    a: Vec3,
-    b: Vec3,
-    c: Vec3,
-) -> f32 {
+pub fn integrate_sg_piecewise_linear(axis: Vec3, sharpness: f32, a: Vec3, b: Vec3, c: Vec3) -> f32 {
     integrate_sg_scheme(
         axis,
         sharpness,
@@ -295,7 +291,8 @@ impl EdgeFrame {
 fn edge_integral(p: DVec3, lam: f64, x: DVec3, y: DVec3, scheme: Scheme) -> EdgeResult {
     let cx = p.cross(x);
     let cy = p.cross(y);
-    if cx.length_squared() < COINCIDENT * COINCIDENT || cy.length_squared() < COINCIDENT * COINCIDENT
+    if cx.length_squared() < COINCIDENT * COINCIDENT
+        || cy.length_squared() < COINCIDENT * COINCIDENT
     {
         // X or Y at ±P: PXY has zero area (X = P) or lies along one meridian (X = −P).
         return SKIP;
@@ -382,18 +379,33 @@ const GL_Y_OFFSETS: [f64; 7] = [2.0, 4.0, 7.0, 11.0, 17.0, 26.0, 40.0];
 fn gl_rule(order: usize) -> (&'static [f64], &'static [f64]) {
     match order {
         0..=2 => (&[0.577_350_269_189_625_8], &[1.0]),
-        3 => (&[0.0, 0.774_596_669_241_483_4], &[0.888_888_888_888_888_8, 0.555_555_555_555_555_7]),
+        3 => (
+            &[0.0, 0.774_596_669_241_483_4],
+            &[0.888_888_888_888_888_8, 0.555_555_555_555_555_7],
+        ),
         4 => (
             &[0.339_981_043_584_856_26, 0.861_136_311_594_052_6],
             &[0.652_145_154_862_546_4, 0.347_854_845_137_453_57],
         ),
         5 => (
             &[0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664],
-            &[0.568_888_888_888_888_7, 0.478_628_670_499_366_3, 0.236_926_885_056_189_28],
+            &[
+                0.568_888_888_888_888_7,
+                0.478_628_670_499_366_3,
+                0.236_926_885_056_189_28,
+            ],
         ),
         6 | 7 => (
-            &[0.238_619_186_083_196_9, 0.661_209_386_466_264_5, 0.932_469_514_203_151_9],
-            &[0.467_913_934_572_691_04, 0.360_761_573_048_138_7, 0.171_324_492_379_170_27],
+            &[
+                0.238_619_186_083_196_9,
+                0.661_209_386_466_264_5,
+                0.932_469_514_203_151_9,
+            ],
+            &[
+                0.467_913_934_572_691_04,
+                0.360_761_573_048_138_7,
+                0.171_324_492_379_170_27,
+            ],
         ),
         _ => (
             &[
@@ -436,7 +448,8 @@ fn gl_piece(f: &EdgeFrame, a: f64, b: f64, nodes: &[f64], weights: &[f64]) -> f6
 fn gl_next_knot(f: &EdgeFrame, x: f64, xb: f64, y_start: f64, offset_idx: &mut usize) -> f64 {
     let mut next = xb;
     let y = f.lam * x;
-    while *offset_idx < GL_Y_OFFSETS.len() && y_start + GL_Y_OFFSETS[*offset_idx] <= y * (1.0 + 1e-12)
+    while *offset_idx < GL_Y_OFFSETS.len()
+        && y_start + GL_Y_OFFSETS[*offset_idx] <= y * (1.0 + 1e-12)
     {
         *offset_idx += 1;
     }
@@ -519,7 +532,9 @@ fn pl_monotone(f: &EdgeFrame, pa: f64, pb: f64, xa: f64, xb: f64, step: f64) -> 
         if last {
             y_next = y_end;
         }
-        let (x_n, psi_n) = if last { (xb, pb) } else {
+        let (x_n, psi_n) = if last {
+            (xb, pb)
+        } else {
             let x_n = y_next / f.lam;
             (x_n, f.psi_of(x_n).clamp(psi_i, pb))
         };

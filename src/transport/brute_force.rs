@@ -17,7 +17,7 @@ const RULE: [([f64; 3], f64); 7] = {
     const A2: f64 = 0.797_426_985_353_087_3;
     const B2: f64 = 0.101_286_507_323_456_34;
     const W0: f64 = 0.225;
-    const W1: f64 = 0.132_394_152_788_506_18;
+    const W1: f64 = 0.132_394_152_788_506_2;
     const W2: f64 = 0.125_939_180_544_827_15;
     [
         ([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], W0),
@@ -64,7 +64,10 @@ fn integrand(c: &Config, n_y: DVec3, frame_y: &Frame, frame_x: &Frame, y: DVec3)
     }
     let f_y = c
         .brdf_y
-        .eval(frame_y.to_local(w_yx.as_vec3()), frame_y.to_local(w_yl.as_vec3()))
+        .eval(
+            frame_y.to_local(w_yx.as_vec3()),
+            frame_y.to_local(w_yl.as_vec3()),
+        )
         .as_dvec3();
     let f_x = c
         .brdf_x

@@ -16,3 +16,6 @@ pub mod study;
 
 pub use receiver::{CosineMode, ReceiverOptions, one_bounce};
 pub use reflector::{ReflectedSg, Reflector, aim_at_receiver, reflected_sg};
+
+#[cfg(test)]
+mod tests;

@@ -31,7 +31,7 @@ impl Default for ReceiverOptions {
     /// The measured best choice (see `results/single-triangle.md`).
     fn default() -> Self {
         ReceiverOptions {
-            cosine: CosineMode::TriangleCentroid,
+            cosine: CosineMode::LobeAxis,
             clip_horizon: true,
         }
     }

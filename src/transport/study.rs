@@ -72,8 +72,12 @@ pub struct Geometry {
     pub wo: Vec3,
 }
 
-/// Four configurations: a large triangle close to the receiver at the specular configuration, a
-/// small far one, the large one seen 15° off the specular direction, and a grazing light.
+/// Five configurations. In each the receiver sits on the mirror direction of the light at the
+/// triangle's centroid, faces back towards the triangle, and is viewed from the direction that
+/// mirrors the light's image into the eye, so glossy-to-glossy transport is at its strongest
+/// (the case the method is for): a large triangle close to the receiver (≈ 1.2 rad across), a
+/// mid-size one, a small far one, the large one under a grazing light, and the mid-size one
+/// viewed 10° away from the double-mirror direction.
 pub fn geometries() -> Vec<Geometry> {
     let big = [
         Vec3::new(-0.5, 0.0, -0.4),
@@ -81,28 +85,34 @@ pub fn geometries() -> Vec<Geometry> {
         Vec3::new(0.0, 0.0, 0.5),
     ];
     let centroid = (big[0] + big[1] + big[2]) / 3.0;
-    let small = big.map(|v| centroid + (v - centroid) * 0.1);
-    let at_mirror = |light: Vec3, dist: f32, off_deg: f32| -> (Vec3, Vec3, Vec3) {
+    let scaled = |k: f32| big.map(|v| centroid + (v - centroid) * k);
+    let place = |tri: [Vec3; 3], light: Vec3, dist: f32, view_off_deg: f32, name| {
         let image = Vec3::new(light.x, -light.y, light.z);
         let dir = (centroid - image).normalize();
-        let dir = glam::Quat::from_rotation_z(off_deg.to_radians()) * dir;
         let x = centroid + dir * dist;
-        // A receiver facing back towards the triangle, tilted, seen from above.
-        let n_x = (-dir + Vec3::new(0.0, 0.3, 0.2)).normalize();
-        let wo = (n_x + Vec3::new(0.2, 0.5, 0.4)).normalize();
-        (x, n_x, wo)
+        // The receiver faces the triangle, tilted sideways so it is not a trivial mirror pair.
+        let n_x = (-dir + Vec3::new(0.0, 0.0, 0.35)).normalize();
+        let to_image = (image - x).normalize();
+        let wo = 2.0 * to_image.dot(n_x) * n_x - to_image;
+        // Rotating about the normal keeps the elevation and turns the view away.
+        let wo = (glam::Quat::from_axis_angle(n_x, view_off_deg.to_radians()) * wo).normalize();
+        Geometry {
+            name,
+            tri,
+            light,
+            x,
+            n_x,
+            wo,
+        }
     };
     let light = Vec3::new(-1.0, 1.0, -0.1);
     let grazing = Vec3::new(-2.0, 0.55, -0.1);
-    let (x1, n1, o1) = at_mirror(light, 0.8, 0.0);
-    let (x2, n2, o2) = at_mirror(light, 2.0, 0.0);
-    let (x3, n3, o3) = at_mirror(light, 0.8, 15.0);
-    let (x4, n4, o4) = at_mirror(grazing, 0.8, 0.0);
     vec![
-        Geometry { name: "near, specular", tri: big, light, x: x1, n_x: n1, wo: o1 },
-        Geometry { name: "far, small", tri: small, light, x: x2, n_x: n2, wo: o2 },
-        Geometry { name: "near, 15° off", tri: big, light, x: x3, n_x: n3, wo: o3 },
-        Geometry { name: "grazing light", tri: big, light: grazing, x: x4, n_x: n4, wo: o4 },
+        place(big, light, 0.8, 0.0, "large, near"),
+        place(scaled(0.3), light, 1.0, 0.0, "mid-size"),
+        place(scaled(0.1), light, 2.0, 0.0, "small, far"),
+        place(big, grazing, 0.8, 0.0, "large, grazing light"),
+        place(scaled(0.3), light, 1.0, 10.0, "mid-size, view 10° off"),
     ]
 }
 
@@ -165,11 +175,31 @@ pub fn variants() -> Vec<(Aim, ReceiverOptions, &'static str)> {
         clip_horizon: true,
     };
     vec![
-        (Aim::Centroid, o(CosineMode::TriangleCentroid), "centroid aim, cos at triangle centroid"),
-        (Aim::Centroid, o(CosineMode::LobeAxis), "centroid aim, cos at lobe axis"),
-        (Aim::Centroid, o(CosineMode::SgProduct), "centroid aim, cos as SG"),
-        (Aim::MirrorImage, o(CosineMode::TriangleCentroid), "mirror-image aim, cos at triangle centroid"),
-        (Aim::MirrorImage, o(CosineMode::LobeAxis), "mirror-image aim, cos at lobe axis"),
+        (
+            Aim::Centroid,
+            o(CosineMode::TriangleCentroid),
+            "centroid aim, cos at triangle centroid",
+        ),
+        (
+            Aim::Centroid,
+            o(CosineMode::LobeAxis),
+            "centroid aim, cos at lobe axis",
+        ),
+        (
+            Aim::Centroid,
+            o(CosineMode::SgProduct),
+            "centroid aim, cos as SG",
+        ),
+        (
+            Aim::MirrorImage,
+            o(CosineMode::TriangleCentroid),
+            "mirror-image aim, cos at triangle centroid",
+        ),
+        (
+            Aim::MirrorImage,
+            o(CosineMode::LobeAxis),
+            "mirror-image aim, cos at lobe axis",
+        ),
     ]
 }
 
