@@ -57,7 +57,11 @@ fn cases() -> Vec<Case> {
                 } else {
                     [1.0, 2.2, 4.9]
                 };
-                let radii = if si == 0 { [r, r, r] } else { [r, 0.6 * r, 1.3 * r] };
+                let radii = if si == 0 {
+                    [r, r, r]
+                } else {
+                    [r, 0.6 * r, 1.3 * r]
+                };
                 let tri = [
                     offset(c, azs[0], radii[0]),
                     offset(c, azs[1], radii[1]),
@@ -199,7 +203,11 @@ fn assert_bar(label: &str, f: fn(Vec3, f32, Vec3, Vec3, Vec3) -> f32) {
     for (l, s) in &per_lam {
         assert!(s.n > 0, "{label}: no ≥1 % cases at λ {l}");
     }
-    assert!(overall.max <= 0.01, "{label}: max rel error {}", overall.max);
+    assert!(
+        overall.max <= 0.01,
+        "{label}: max rel error {}",
+        overall.max
+    );
     let mean = overall.sum / overall.n as f64;
     assert!(mean <= 0.002, "{label}: mean rel error {mean}");
 }
@@ -222,7 +230,11 @@ fn piecewise_linear_meets_accuracy_bar() {
 #[test]
 fn reference_matches_brute_force_2d() {
     let c = DVec3::new(0.2, 0.4, -0.9).normalize();
-    let tri = [offset(c, 0.1, 0.5), offset(c, 2.0, 0.4), offset(c, 4.0, 0.6)];
+    let tri = [
+        offset(c, 0.1, 0.5),
+        offset(c, 2.0, 0.4),
+        offset(c, 4.0, 0.6),
+    ];
     let [a, b, cc] = tri;
     let inner = (a + b + cc).normalize();
     for lam in [0.1, 1.0, 10.0, 100.0] {
@@ -255,9 +267,8 @@ fn edge_closed_forms_match_quadrature() {
             x0: s0 * s0 / (1.0 + k),
             lam: 3.0,
         };
-        let cos_e = |psi: f64| {
-            k * psi.cos() / (psi.cos().powi(2) + s0 * s0 * psi.sin().powi(2)).sqrt()
-        };
+        let cos_e =
+            |psi: f64| k * psi.cos() / (psi.cos().powi(2) + s0 * s0 * psi.sin().powi(2)).sqrt();
         // Paper's form cos ψ / √(cos²ψ + tan²θ0), away from the poles.
         if theta0 < 1.5 {
             for psi in [0.0f64, 0.4, 1.2, 2.5] {
@@ -284,7 +295,10 @@ fn edge_closed_forms_match_quadrature() {
             let num_c2 = integrate(&|p| cos_e(p).powi(2), a, b, 1e-14, 1e-15);
             let anti2 = |p: f64| p - s0 * (s0 * p.sin()).atan2(p.cos());
             let closed_c2 = anti2(b) - anti2(a);
-            assert!((num_c2 - closed_c2).abs() < tol, "∫cos² θ0 {theta0} [{a},{b}]");
+            assert!(
+                (num_c2 - closed_c2).abs() < tol,
+                "∫cos² θ0 {theta0} [{a},{b}]"
+            );
             // Stable X(ψ) = ψ − asin(k sin ψ), as an antiderivative of x = 1 − cos θ_e.
             let num_x = integrate(&|p| f.x_of(p), a, b, 1e-14, 1e-300);
             let closed_x = f.big_x(b) - f.big_x(a);
@@ -298,7 +312,10 @@ fn edge_closed_forms_match_quadrature() {
             let x = f.x_of(psi);
             let back = f.psi_of(x);
             if theta0 > 1e-3 && theta0 < 1.5 {
-                assert!((back - psi).abs() < 1e-7, "ψ(x(ψ)) θ0 {theta0} ψ {psi}: {back}");
+                assert!(
+                    (back - psi).abs() < 1e-7,
+                    "ψ(x(ψ)) θ0 {theta0} ψ {psi}: {back}"
+                );
             }
         }
     }
@@ -344,7 +361,19 @@ fn degenerate_inputs_are_sane() {
     let a = Vec3::new(0.1, 0.2, 1.0).normalize();
     let b = Vec3::new(0.4, -0.1, 1.0).normalize();
     let c = Vec3::new(-0.2, -0.3, 1.0).normalize();
-    let lams = [0.0, 1e-6, 0.01, 1.0, 100.0, 1e4, 1e5, 1e30, f32::INFINITY, f32::NAN, -1.0];
+    let lams = [
+        0.0,
+        1e-6,
+        0.01,
+        1.0,
+        100.0,
+        1e4,
+        1e5,
+        1e30,
+        f32::INFINITY,
+        f32::NAN,
+        -1.0,
+    ];
     let axes = [
         a,
         -a,
@@ -363,7 +392,13 @@ fn degenerate_inputs_are_sane() {
             check_sane(p, lam, a, a, b);
             check_sane(p, lam, a, b, (a + b).normalize());
             check_sane(p, lam, a, b, -a);
-            check_sane(p, lam, a, a + Vec3::new(1e-4, 0.0, 0.0), a + Vec3::new(0.0, 1e-4, 0.0));
+            check_sane(
+                p,
+                lam,
+                a,
+                a + Vec3::new(1e-4, 0.0, 0.0),
+                a + Vec3::new(0.0, 1e-4, 0.0),
+            );
             check_sane(p, lam, a * 3.0, b * 0.5, c * 100.0);
             check_sane(p, lam, a, b, c);
             check_sane(p, lam, a, b, Vec3::ZERO);
@@ -378,27 +413,60 @@ fn degenerate_inputs_are_sane() {
     for lam in [1.0f32, 100.0, 1e4] {
         let at = integrate_sg(a, lam, a, b, c);
         let near = integrate_sg((a * 0.999_999 + b * 1e-6).normalize(), lam, a, b, c);
-        assert!((at - near).abs() <= 1e-3 * at, "vertex λ {lam}: {at} vs {near}");
+        assert!(
+            (at - near).abs() <= 1e-3 * at,
+            "vertex λ {lam}: {at} vs {near}"
+        );
         let m = (a + b).normalize();
         let on = integrate_sg(m, lam, a, b, c);
         let inward = integrate_sg((m + c * 1e-6).normalize(), lam, a, b, c);
         let outward = integrate_sg((m - c * 1e-6).normalize(), lam, a, b, c);
-        assert!((on - inward).abs() <= 2e-3 * on, "edge λ {lam}: {on} vs {inward}");
-        assert!((on - outward).abs() <= 2e-3 * on, "edge λ {lam}: {on} vs {outward}");
+        assert!(
+            (on - inward).abs() <= 2e-3 * on,
+            "edge λ {lam}: {on} vs {inward}"
+        );
+        assert!(
+            (on - outward).abs() <= 2e-3 * on,
+            "edge λ {lam}: {on} vs {outward}"
+        );
     }
     // −axis at a vertex / on an edge: continuous with −axis just inside and just outside.
     for lam in [0.01f32, 0.3, 1.0] {
         for q in [a, (a + b).normalize()] {
             let at = f64::from(integrate_sg(-q, lam, a, b, c));
             let cen = (a + b + c).normalize();
-            let ins = f64::from(integrate_sg(-(q + (cen - q) * 1e-5).normalize(), lam, a, b, c));
-            let out = f64::from(integrate_sg(-(q - (cen - q) * 1e-5).normalize(), lam, a, b, c));
-            assert!((at - ins).abs() <= 1e-3 * at, "−p at {q}: {at} vs inside {ins}");
-            assert!((at - out).abs() <= 1e-3 * at, "−p at {q}: {at} vs outside {out}");
+            let ins = f64::from(integrate_sg(
+                -(q + (cen - q) * 1e-5).normalize(),
+                lam,
+                a,
+                b,
+                c,
+            ));
+            let out = f64::from(integrate_sg(
+                -(q - (cen - q) * 1e-5).normalize(),
+                lam,
+                a,
+                b,
+                c,
+            ));
+            assert!(
+                (at - ins).abs() <= 1e-3 * at,
+                "−p at {q}: {at} vs inside {ins}"
+            );
+            assert!(
+                (at - out).abs() <= 1e-3 * at,
+                "−p at {q}: {at} vs outside {out}"
+            );
         }
     }
     // The whole-hemisphere-sized triangle with −p inside.
-    let v = check_sane(Vec3::Z, 2.0, Vec3::new(1.0, 0.0, -0.2), Vec3::new(-0.5, 0.87, -0.2), Vec3::new(-0.5, -0.87, -0.2));
+    let v = check_sane(
+        Vec3::Z,
+        2.0,
+        Vec3::new(1.0, 0.0, -0.2),
+        Vec3::new(-0.5, 0.87, -0.2),
+        Vec3::new(-0.5, -0.87, -0.2),
+    );
     assert!(v > 0.0);
 }
 
@@ -440,7 +508,7 @@ proptest! {
     }
 
     #[test]
-    fn invariant_under_rotation((p, lam, [a, b, c]) in config(), axis in unit_vec(), angle in 0.0f32..6.28) {
+    fn invariant_under_rotation((p, lam, [a, b, c]) in config(), axis in unit_vec(), angle in 0.0f32..std::f32::consts::TAU) {
         let q = Quat::from_axis_angle(axis, angle);
         let v0 = f64::from(integrate_sg(p, lam, a, b, c));
         let v1 = f64::from(integrate_sg(q * p, lam, q * a, q * b, q * c));
@@ -464,7 +532,11 @@ proptest! {
 fn reference_is_rotation_invariant() {
     let q = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 1.1);
     let c = DVec3::new(0.0, 0.6, 0.8);
-    let tri = [offset(c, 0.0, 0.3), offset(c, 2.0, 0.3), offset(c, 4.0, 0.3)];
+    let tri = [
+        offset(c, 0.0, 0.3),
+        offset(c, 2.0, 0.3),
+        offset(c, 4.0, 0.3),
+    ];
     let p = offset(c, 1.0, 0.5);
     let r0 = reference_triangle(p, 50.0, tri[0], tri[1], tri[2], 1e-12);
     let r1 = reference_triangle(q * p, 50.0, q * tri[0], q * tri[1], q * tri[2], 1e-12);
@@ -497,12 +569,43 @@ fn scheme_variants_accuracy() {
                 n += 1;
             }
         }
-        eprintln!("{label}: max {max:.2e} mean {:.2e} over {n}", sum / n as f64);
+        eprintln!(
+            "{label}: max {max:.2e} mean {:.2e} over {n}",
+            sum / n as f64
+        );
     }
     for order in [3, 4, 5, 6, 8] {
-        run(&format!("GL order {order}"), Scheme::GaussLegendre { order });
+        run(
+            &format!("GL order {order}"),
+            Scheme::GaussLegendre { order },
+        );
     }
     for step in [0.3, 0.2, 0.1, 0.05, 0.025] {
         run(&format!("PL step {step}"), Scheme::PiecewiseLinear { step });
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, .. ProptestConfig::default() })]
+
+    /// Random triangles, axes (also antipodal, so −axis is often inside) and λ ∈ [0.01, 1e4]
+    /// against the f64 reference, with the accuracy bar's criterion.
+    #[test]
+    fn random_configurations_match_reference((p, lam, [a, b, c]) in config(), flip in any::<bool>()) {
+        let p = if flip { -p } else { p };
+        let r = reference_triangle(
+            p.as_dvec3().normalize(),
+            f64::from(lam),
+            a.as_dvec3().normalize(),
+            b.as_dvec3().normalize(),
+            c.as_dvec3().normalize(),
+            1e-11,
+        );
+        let lobe = super::super::sg::lobe_integral_f64(f64::from(lam));
+        for f in [integrate_sg, integrate_sg_gauss_legendre, integrate_sg_piecewise_linear] {
+            let got = f64::from(f(p, lam, a, b, c));
+            let tol = if r >= 0.01 * lobe { 0.01 * r } else { 1e-4 * lobe };
+            prop_assert!((got - r).abs() <= tol, "got {} ref {} (lobe {})", got, r, lobe);
+        }
     }
 }
