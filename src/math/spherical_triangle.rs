@@ -194,7 +194,8 @@ pub fn integrate_sg_f64(p: DVec3, lam: f64, a: DVec3, b: DVec3, c: DVec3, scheme
     } else {
         -w
     };
-    if w > 0.999_999 {
+    if w > 0.25 {
+        // P inside (W = 2π) or on an edge (W = π; that edge was skipped if det = 0 exactly).
         xmin = 0.0;
     }
     let result = sum + frac * lobe;

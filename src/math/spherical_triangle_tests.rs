@@ -430,6 +430,16 @@ fn degenerate_inputs_are_sane() {
             "edge λ {lam}: {on} vs {outward}"
         );
     }
+    // Axis exactly on an edge (det(P, X, Y) = 0 in floating point): half the lobe.
+    for lam in [100.0f32, 1e3, 1e4] {
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::new(0.2, 0.2, -1.0).normalize());
+        let p = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let half = 0.5 * super::super::sg::lobe_integral(lam);
+        for (a, b, c) in [(x, y, z), (y, z, x), (z, x, y), (x, z, y)] {
+            let v = check_sane(p, lam, a, b, c);
+            assert!((v - half).abs() <= 1e-3 * half, "λ {lam}: {v} vs {half}");
+        }
+    }
     // −axis at a vertex / on an edge: continuous with −axis just inside and just outside.
     for lam in [0.01f32, 0.3, 1.0] {
         for q in [a, (a + b).normalize()] {
