@@ -67,7 +67,9 @@ fn cases() -> Vec<Case> {
                     offset(c, azs[1], radii[1]),
                     offset(c, azs[2], radii[2]),
                 ];
-                let tri = tri.map(|v| v.as_vec3().as_dvec3().normalize());
+                // f32-exact vertices (what integrate_sg receives); the reference normalises them
+                // in f64 exactly like integrate_sg does.
+                let tri = tri.map(|v| v.as_vec3().as_dvec3());
                 let inner = (tri[0] + tri[1] + tri[2]).normalize();
                 let mut places = vec![
                     (inner, Place::Inside),
@@ -85,7 +87,7 @@ fn cases() -> Vec<Case> {
                     places.push((offset(c, 2.5, r + ang), Place::FarOutside));
                 }
                 for (p, place) in places {
-                    let p = p.as_vec3().as_dvec3().normalize();
+                    let p = p.as_vec3().as_dvec3();
                     out.push(Case {
                         p,
                         lam,
@@ -101,8 +103,8 @@ fn cases() -> Vec<Case> {
 }
 
 fn reference(case: &Case) -> f64 {
-    let [a, b, c] = case.tri;
-    reference_triangle(case.p, case.lam, a, b, c, 1e-11)
+    let [a, b, c] = case.tri.map(|v| v / v.length());
+    reference_triangle(case.p / case.p.length(), case.lam, a, b, c, 1e-11)
 }
 
 /// The sweep's cases with their references, computed once for all tests.
