@@ -20,10 +20,13 @@
 //!
 //! The 1-D azimuthal integral has two implementations: the paper's piecewise-linear one
 //! ([`Scheme::PiecewiseLinear`]: h interpolated linearly in cos θ, every piece integrated
-//! exactly with ∫ cos θ_e dψ = asin(cos θ0 sin ψ)) and Gauss-Legendre quadrature in ψ
-//! ([`Scheme::GaussLegendre`]). Both split the azimuth range adaptively from λ and the edge's
-//! extent. [`integrate_sg`] uses the faster one at the tested accuracy (see
-//! `results/sg-core.md`). All internal arithmetic is f64. Derivations: `docs/sg-math.md`.
+//! exactly with ∫ cos θ_e dψ = asin(cos θ0 sin ψ)) and Gauss-Legendre quadrature
+//! ([`Scheme::GaussLegendre`]) of the same integral substituted to t = tan(σ/2), σ the edge's arc
+//! length from the foot, where the Jacobian's poles cancel against the integrand's zeros. Both
+//! split the range adaptively from λ and the edge's extent in y = λ (1 − cos θ).
+//! [`integrate_sg`] uses Gauss-Legendre, 6.6× faster and far more accurate than the
+//! piecewise-linear scheme at their defaults (`results/sg-core.md`). All internal arithmetic is
+//! f64. Derivations: `docs/sg-math.md`.
 
 use std::f64::consts::{PI, TAU};
 
@@ -38,7 +41,8 @@ pub enum Scheme {
     /// y = λ x by `step` (grown with the distance from the edge's smallest y, see
     /// `docs/sg-math.md`); each piece is integrated exactly over ψ.
     PiecewiseLinear { step: f64 },
-    /// Gauss-Legendre quadrature of the given order (2..=8) of the same azimuthal integral,
+    /// Gauss-Legendre quadrature of the given order (2, 3, 4, 5, 6 or 8; 7 uses 6, below 2
+    /// uses 2, above 8 uses 8) of the same azimuthal integral,
     /// substituted to the edge's arc length σ with the Jacobian's poles cancelled, on pieces
     /// split in y = λ x.
     GaussLegendre { order: usize },
@@ -376,9 +380,10 @@ fn fold(t: f64) -> f64 {
     (t - TAU * (t / TAU).round()).abs()
 }
 
-/// Knot offsets in y = λ x above a monotone piece's smallest y for Gauss-Legendre: the
-/// integrand's e^{−y} part varies by at most e^{2} on the first piece and the later pieces,
-/// weighted by e^{−d}, may grow. Past the last offset the integrand is constant to 1e-17.
+/// Piece boundaries of the Gauss-Legendre scheme, as offsets in y = λ x above a half-edge's
+/// smallest y: e^{−y} varies by at most e^{2.5} on the first piece; later pieces, weighted by
+/// e^{−d}, may vary more. Past the last offset the e^{−y} part is below e^{−40} of the first
+/// piece's and the rest is closed-form.
 const GL_Y_OFFSETS: [f64; 5] = [2.5, 6.0, 12.0, 22.0, 40.0];
 
 /// Gauss-Legendre nodes (non-negative half) and weights on [−1, 1].
