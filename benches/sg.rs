@@ -1,1 +1,137 @@
-fn main() {}
+//! ns per call of the SG core: the integral of an SG over a spherical triangle (both schemes and
+//! their variants) over a fixed table of realistic inputs, and the SG product / inner product.
+//!
+//! Run: `CARGO_TARGET_DIR=/work/main/target cargo bench --bench sg`. Every benchmark walks the
+//! whole table per iteration; divan's throughput is in calls (items) per second, and the ns per
+//! call is the median time divided by the table size. Results: `results/sg-core.md`.
+
+use divan::{Bencher, black_box, counter::ItemsCount};
+use glam::Vec3;
+use interreflect::math::sg::Sg;
+use interreflect::math::spherical_triangle::{
+    Scheme, integrate_sg, integrate_sg_gauss_legendre, integrate_sg_piecewise_linear,
+    integrate_sg_scheme,
+};
+
+fn main() {
+    divan::main();
+}
+
+const LAMBDAS: [f32; 5] = [1.0, 10.0, 100.0, 1000.0, 10000.0];
+
+/// Rotate `c` by `angle` towards azimuth `az` (in a fixed tangent frame).
+fn offset(c: Vec3, az: f32, angle: f32) -> Vec3 {
+    let t = if c.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let t = (t - c * c.dot(t)).normalize();
+    let b = c.cross(t);
+    (c * angle.cos() + (t * az.cos() + b * az.sin()) * angle.sin()).normalize()
+}
+
+/// (axis, λ, a, b, c): per λ, small (0.01 rad), medium (0.1) and large (1 rad) triangles with
+/// the axis inside, just outside (1.5 radii from the centre) and 0.5 rad away.
+fn table(lams: &[f32]) -> Vec<(Vec3, f32, Vec3, Vec3, Vec3)> {
+    let c = Vec3::new(0.3, -0.4, 0.87).normalize();
+    let mut out = Vec::new();
+    for &lam in lams {
+        for size in [0.01f32, 0.1, 1.0] {
+            let r = size / 3f32.sqrt();
+            let a = offset(c, 0.2, r);
+            let b = offset(c, 2.3, 0.8 * r);
+            let cc = offset(c, 4.3, 1.1 * r);
+            for p in [
+                offset(c, 1.0, 0.2 * r),
+                offset(c, 5.5, 1.5 * r),
+                offset(c, 3.3, r + 0.5),
+            ] {
+                out.push((p, lam, a, b, cc));
+            }
+        }
+    }
+    out
+}
+
+fn run(
+    bencher: Bencher,
+    rows: Vec<(Vec3, f32, Vec3, Vec3, Vec3)>,
+    f: impl Fn(Vec3, f32, Vec3, Vec3, Vec3) -> f32 + Sync,
+) {
+    bencher.counter(ItemsCount::new(rows.len())).bench(|| {
+        let mut s = 0.0f32;
+        for &(p, l, a, b, c) in black_box(&rows) {
+            s += f(p, l, a, b, c);
+        }
+        s
+    });
+}
+
+/// The default `integrate_sg`, per λ (9 geometries each).
+#[divan::bench(args = LAMBDAS)]
+fn integrate_sg_default(bencher: Bencher, lam: f32) {
+    run(bencher, table(&[lam]), integrate_sg);
+}
+
+/// Gauss-Legendre (default order), per λ.
+#[divan::bench(args = LAMBDAS)]
+fn integrate_sg_gl(bencher: Bencher, lam: f32) {
+    run(bencher, table(&[lam]), integrate_sg_gauss_legendre);
+}
+
+/// The paper's piecewise-linear scheme (default step), per λ.
+#[divan::bench(args = LAMBDAS)]
+fn integrate_sg_pl(bencher: Bencher, lam: f32) {
+    run(bencher, table(&[lam]), integrate_sg_piecewise_linear);
+}
+
+/// Gauss-Legendre orders over the whole table (45 calls), for accuracy per ns.
+#[divan::bench(args = [3, 4, 5, 6, 8])]
+fn variant_gl_order(bencher: Bencher, order: usize) {
+    run(bencher, table(&LAMBDAS), move |p, l, a, b, c| {
+        integrate_sg_scheme(p, l, a, b, c, Scheme::GaussLegendre { order })
+    });
+}
+
+/// Piecewise-linear knot steps over the whole table (45 calls), for accuracy per ns.
+#[divan::bench(args = [0.2, 0.1, 0.05, 0.025])]
+fn variant_pl_step(bencher: Bencher, step: f64) {
+    run(bencher, table(&LAMBDAS), move |p, l, a, b, c| {
+        integrate_sg_scheme(p, l, a, b, c, Scheme::PiecewiseLinear { step })
+    });
+}
+
+fn lobes() -> Vec<(Sg, Sg)> {
+    let mut out = Vec::new();
+    for (i, l1) in [1.0f32, 30.0, 1000.0, 1e4].into_iter().enumerate() {
+        for (j, l2) in [2.133f32, 100.0, 1e5].into_iter().enumerate() {
+            let a = Sg::new(offset(Vec3::Z, i as f32, 0.3), l1, Vec3::new(1.0, 0.5, 0.2));
+            let b = Sg::new(offset(Vec3::Z, j as f32 + 2.0, 0.1), l2, Vec3::ONE);
+            out.push((a, b));
+        }
+    }
+    out
+}
+
+/// `Sg::product` over 12 lobe pairs.
+#[divan::bench]
+fn sg_product(bencher: Bencher) {
+    let rows = lobes();
+    bencher.counter(ItemsCount::new(rows.len())).bench(|| {
+        let mut s = Vec3::ZERO;
+        for (a, b) in black_box(&rows) {
+            s += a.product(b).amplitude;
+        }
+        s
+    });
+}
+
+/// `Sg::inner_product` over 12 lobe pairs.
+#[divan::bench]
+fn sg_inner_product(bencher: Bencher) {
+    let rows = lobes();
+    bencher.counter(ItemsCount::new(rows.len())).bench(|| {
+        let mut s = Vec3::ZERO;
+        for (a, b) in black_box(&rows) {
+            s += a.inner_product(b);
+        }
+        s
+    });
+}

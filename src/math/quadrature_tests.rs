@@ -108,23 +108,24 @@ pub fn basis(n: DVec3) -> (DVec3, DVec3) {
 }
 
 /// ∫_{S²} f(ω) dω in polar coordinates around the unit `pole` (where f should peak): the
-/// azimuth by adaptive GK (outer), cos θ by adaptive GK (inner).
+/// azimuth by adaptive GK (outer), x = 1 − cos θ by adaptive GK (inner) on panels split at
+/// x = 10^−k (k = 0..12) so lobes as sharp as λ = 1e8 are resolved.
 pub fn sphere_integral(f: impl Fn(DVec3) -> f64, pole: DVec3, rel_tol: f64) -> f64 {
     let (t, b) = basis(pole);
+    let mut cuts = vec![0.0];
+    cuts.extend((0..=12).rev().map(|k| 10f64.powi(-k)));
+    cuts.push(2.0);
     integrate(
         |phi| {
             let (s, c) = phi.sin_cos();
             let d = t * c + b * s;
-            integrate(
-                |ct| {
-                    let st = (1.0 - ct * ct).max(0.0).sqrt();
-                    f(pole * ct + d * st)
-                },
-                -1.0,
-                1.0,
-                rel_tol * 0.1,
-                1e-300,
-            )
+            let g = |x: f64| {
+                let st = (x * (2.0 - x)).max(0.0).sqrt();
+                f(pole * (1.0 - x) + d * st)
+            };
+            cuts.windows(2)
+                .map(|w| integrate(g, w[0], w[1], rel_tol * 0.1, 1e-300))
+                .sum::<f64>()
         },
         0.0,
         TAU,

@@ -33,10 +33,14 @@ pub struct Sg {
     pub amplitude: Vec3,
 }
 
-/// λ sanitised: NaN and negative values become 0.
+/// Largest sharpness used internally (larger values, including +∞, are clamped to it), so
+/// that sums of two sharpnesses stay finite in f32.
+pub const MAX_SHARPNESS: f32 = 1e30;
+
+/// λ sanitised: NaN and negative values become 0, values above [`MAX_SHARPNESS`] are clamped.
 #[inline]
 fn clean_sharpness(l: f32) -> f32 {
-    if l > 0.0 { l } else { 0.0 }
+    if l > 0.0 { l.min(MAX_SHARPNESS) } else { 0.0 }
 }
 
 /// ∫_{S²} exp(λ (ω·p − 1)) dω = 2π (1 − e^{−2λ}) / λ, computed as −2π expm1(−2λ) / λ;
@@ -84,7 +88,7 @@ pub fn inner_product_f64(p1: DVec3, l1: f64, p2: DVec3, l2: f64) -> f64 {
 
 impl Sg {
     /// A lobe with the axis normalised (a zero or non-finite axis becomes +Z) and λ clamped
-    /// to ≥ 0 (NaN → 0).
+    /// to [0, [`MAX_SHARPNESS`]] (NaN → 0).
     pub fn new(axis: Vec3, sharpness: f32, amplitude: Vec3) -> Sg {
         Sg {
             axis: axis.try_normalize().unwrap_or(Vec3::Z),

@@ -67,7 +67,9 @@ fn cases() -> Vec<Case> {
                     offset(c, azs[1], radii[1]),
                     offset(c, azs[2], radii[2]),
                 ];
-                let tri = tri.map(|v| v.as_vec3().as_dvec3().normalize());
+                // f32-exact vertices (what integrate_sg receives); the reference normalises them
+                // in f64 exactly like integrate_sg does.
+                let tri = tri.map(|v| v.as_vec3().as_dvec3());
                 let inner = (tri[0] + tri[1] + tri[2]).normalize();
                 let mut places = vec![
                     (inner, Place::Inside),
@@ -85,7 +87,7 @@ fn cases() -> Vec<Case> {
                     places.push((offset(c, 2.5, r + ang), Place::FarOutside));
                 }
                 for (p, place) in places {
-                    let p = p.as_vec3().as_dvec3().normalize();
+                    let p = p.as_vec3().as_dvec3();
                     out.push(Case {
                         p,
                         lam,
@@ -101,8 +103,8 @@ fn cases() -> Vec<Case> {
 }
 
 fn reference(case: &Case) -> f64 {
-    let [a, b, c] = case.tri;
-    reference_triangle(case.p, case.lam, a, b, c, 1e-11)
+    let [a, b, c] = case.tri.map(|v| v / v.length());
+    reference_triangle(case.p / case.p.length(), case.lam, a, b, c, 1e-11)
 }
 
 /// The sweep's cases with their references, computed once for all tests.
@@ -430,6 +432,16 @@ fn degenerate_inputs_are_sane() {
             "edge λ {lam}: {on} vs {outward}"
         );
     }
+    // Axis exactly on an edge (det(P, X, Y) = 0 in floating point): half the lobe.
+    for lam in [100.0f32, 1e3, 1e4] {
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::new(0.2, 0.2, -1.0).normalize());
+        let p = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let half = 0.5 * super::super::sg::lobe_integral(lam);
+        for (a, b, c) in [(x, y, z), (y, z, x), (z, x, y), (x, z, y)] {
+            let v = check_sane(p, lam, a, b, c);
+            assert!((v - half).abs() <= 1e-3 * half, "λ {lam}: {v} vs {half}");
+        }
+    }
     // −axis at a vertex / on an edge: continuous with −axis just inside and just outside.
     for lam in [0.01f32, 0.3, 1.0] {
         for q in [a, (a + b).normalize()] {
@@ -508,7 +520,7 @@ proptest! {
     }
 
     #[test]
-    fn invariant_under_rotation((p, lam, [a, b, c]) in config(), axis in unit_vec(), angle in 0.0f32..6.28) {
+    fn invariant_under_rotation((p, lam, [a, b, c]) in config(), axis in unit_vec(), angle in 0.0f32..std::f32::consts::TAU) {
         let q = Quat::from_axis_angle(axis, angle);
         let v0 = f64::from(integrate_sg(p, lam, a, b, c));
         let v1 = f64::from(integrate_sg(q * p, lam, q * a, q * b, q * c));
@@ -582,5 +594,30 @@ fn scheme_variants_accuracy() {
     }
     for step in [0.3, 0.2, 0.1, 0.05, 0.025] {
         run(&format!("PL step {step}"), Scheme::PiecewiseLinear { step });
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, .. ProptestConfig::default() })]
+
+    /// Random triangles, axes (also antipodal, so −axis is often inside) and λ ∈ [0.01, 1e4]
+    /// against the f64 reference, with the accuracy bar's criterion.
+    #[test]
+    fn random_configurations_match_reference((p, lam, [a, b, c]) in config(), flip in any::<bool>()) {
+        let p = if flip { -p } else { p };
+        let r = reference_triangle(
+            p.as_dvec3().normalize(),
+            f64::from(lam),
+            a.as_dvec3().normalize(),
+            b.as_dvec3().normalize(),
+            c.as_dvec3().normalize(),
+            1e-11,
+        );
+        let lobe = super::super::sg::lobe_integral_f64(f64::from(lam));
+        for f in [integrate_sg, integrate_sg_gauss_legendre, integrate_sg_piecewise_linear] {
+            let got = f64::from(f(p, lam, a, b, c));
+            let tol = if r >= 0.01 * lobe { 0.01 * r } else { 1e-4 * lobe };
+            prop_assert!((got - r).abs() <= tol, "got {} ref {} (lobe {})", got, r, lobe);
+        }
     }
 }
