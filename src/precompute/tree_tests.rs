@@ -388,6 +388,10 @@ fn real_scenes_ring_and_bunny() {
             if node.is_leaf() {
                 let id = t.leaves_under(i as u32)[0];
                 assert_eq!(node.material, Some(scene.tri_object(id).material));
+                let brdf = scene.tri_material(id);
+                assert_eq!(node.colour, brdf.diffuse() + brdf.specular());
+                let cross = scene.mesh.tri_cross(id);
+                assert!((node.mean_normal - cross.normalize_or_zero()).length() < 1e-6);
             }
         }
         println!(
