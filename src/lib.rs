@@ -28,6 +28,7 @@ pub mod compare;
 pub mod fsutil;
 pub mod image;
 pub mod math;
+pub mod precompute;
 pub mod render;
 pub mod scene;
 pub mod transport;

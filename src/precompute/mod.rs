@@ -1,0 +1,7 @@
+//! Scene-dependent, light-independent precomputation for the SG renderer (Xu et al. 2014, §6).
+//!
+//! - [`tree`]: the PCA-split binary tree over the reflector triangles, with per-node shading
+//!   data (centroid, average normal, colour, area, material) and bounds (box, normal cone,
+//!   colour range).
+
+pub mod tree;
