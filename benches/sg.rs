@@ -135,3 +135,28 @@ fn sg_inner_product(bencher: Bencher) {
         s
     });
 }
+
+/// One-triangle SG transport (reflector lobes + receiver integration) over the single-triangle
+/// study's material pairs in the mid-size configuration, per call.
+#[divan::bench]
+fn one_triangle_transport(bencher: Bencher) {
+    use interreflect::transport::study;
+    let mats = study::materials();
+    let g = study::geometries()[1];
+    let opts = interreflect::transport::ReceiverOptions::default();
+    let pairs: Vec<_> = mats
+        .iter()
+        .flat_map(|a| mats.iter().map(move |b| (a.brdf, b.brdf)))
+        .collect();
+    bencher.counter(ItemsCount::new(pairs.len())).bench(|| {
+        for (a, b) in &pairs {
+            black_box(study::sg_value(
+                black_box(&g),
+                a,
+                b,
+                study::Aim::MirrorImage,
+                &opts,
+            ));
+        }
+    });
+}
