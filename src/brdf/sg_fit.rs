@@ -27,7 +27,7 @@
 
 pub mod ggx;
 mod ggx_table;
-mod quadrature;
+pub(crate) mod quadrature;
 pub mod report;
 
 #[cfg(test)]
