@@ -1,7 +1,7 @@
 //! ns per call of the SG core: the integral of an SG over a spherical triangle (both schemes and
 //! their variants) over a fixed table of realistic inputs, and the SG product / inner product.
 //!
-//! Run: `CARGO_TARGET_DIR=/work/main/target cargo bench --bench sg`. Every benchmark walks the
+//! Run: `cargo bench --bench sg`. Every benchmark walks the
 //! whole table per iteration; divan's throughput is in calls (items) per second, and the ns per
 //! call is the median time divided by the table size. Results: `results/sg-core.md`.
 

@@ -25,6 +25,7 @@
 pub mod accel;
 pub mod brdf;
 pub mod compare;
+pub mod cut;
 pub mod fsutil;
 pub mod image;
 pub mod math;

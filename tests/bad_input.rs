@@ -408,6 +408,10 @@ fn bad_cli_arguments_fail_cleanly() {
         vec!["--threads", "0"],
         vec!["--width", "0"],
         vec!["--method", "direct", "--indirect-only"],
+        vec!["--method", "sg", "--threshold", "2"],
+        vec!["--method", "sg", "--threshold", "NaN"],
+        vec!["--method", "sg", "--cut", "triangle"],
+        vec!["--method", "sg", "--visibility", "approx"],
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_interreflect"))
             .arg("render")
@@ -420,5 +424,21 @@ fn bad_cli_arguments_fail_cleanly() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         assert!(!stderr(&o).contains("panicked"));
         assert!(!c.out().exists());
+    }
+}
+
+#[test]
+fn bad_sg_settings_are_named() {
+    for (body, field) in [
+        ("threshold = -0.5", "methods.sg.threshold"),
+        ("threshold = nan", "methods.sg.threshold"),
+        ("max_cut = 100000000", "methods.sg.max_cut"),
+        ("spp = 0", "methods.sg.spp"),
+        ("cut = \"node\"", "cut"),
+        ("treshold = 0.1", "treshold"),
+    ] {
+        let c = Case::new();
+        let s = scene_with(&c, &format!("{GOOD_HEAD}{PLANE}\n[methods.sg]\n{body}\n"));
+        assert_rejected(&c, &s, &["scene.toml", field]);
     }
 }

@@ -3,12 +3,14 @@
 use super::progress;
 use anyhow::{Context, bail};
 use interreflect::accel::Accel;
+use interreflect::cut::CutOptions;
 use interreflect::fsutil::same_file;
 use interreflect::image::{Tonemap, write_exr, write_png};
-use interreflect::render::Method;
 use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
+use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
 use interreflect::render::cpu::{Progress, RenderOptions, render};
+use interreflect::render::{Method, Visibility};
 use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -22,7 +24,23 @@ pub struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value_t = Method::Reference)]
     pub method: Method,
-    /// Samples per pixel (default: the scene's render.spp).
+    /// Visibility for sg / sg-brute (exact: shadow rays through the BVH).
+    #[arg(long, value_enum, default_value_t = Visibility::Exact)]
+    pub visibility: Visibility,
+    /// Where sg selects cuts (default: the scene's methods.sg.cut).
+    #[arg(long, value_enum)]
+    pub cut: Option<CutMode>,
+    /// Cut error threshold, a fraction of the estimate (default: methods.sg.threshold).
+    #[arg(long)]
+    pub threshold: Option<f32>,
+    /// Cut size cap, 0 = none (default: methods.sg.max_cut).
+    #[arg(long)]
+    pub max_cut: Option<u32>,
+    /// Split reflector triangles to at most this edge length for sg, 0 = never
+    /// (default: methods.sg.max_edge, or 1/128 of the scene's diagonal).
+    #[arg(long)]
+    pub max_edge: Option<f32>,
+    /// Samples per pixel (default: the scene's render.spp; methods.sg.spp for sg and sg-brute).
     #[arg(long)]
     pub spp: Option<u32>,
     /// Seed of the random streams (default: the scene's render.seed).
@@ -64,18 +82,38 @@ struct RenderLog<'a> {
     spp: u32,
     seed: u64,
     threads: usize,
-    reflector_samples: u32,
-    bsdf_samples: u32,
-    light_paths_per_sample: u32,
     triangles: usize,
     tonemap: String,
     seconds: Timings,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    reference: Option<ReferenceLog>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sg: Option<SgLog>,
+}
+
+/// Reference-renderer fields of the log.
+#[derive(Serialize)]
+struct ReferenceLog {
+    reflector_samples: u32,
+    bsdf_samples: u32,
+    light_paths_per_sample: u32,
     camera_paths: u64,
     light_paths: u64,
     rays: u64,
     paths_per_second: f64,
     rays_per_second: f64,
     nonfinite_samples: u64,
+}
+
+/// SG-method fields of the log.
+#[derive(Serialize)]
+struct SgLog {
+    visibility: Visibility,
+    cut_mode: CutMode,
+    cut: CutOptions,
+    max_edge: f32,
+    #[serde(flatten)]
+    stats: SgStats,
 }
 
 #[derive(Serialize, Clone, Copy, Default)]
@@ -156,7 +194,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    let spp = args.spp.unwrap_or(scene.settings.spp);
+    let is_sg = matches!(args.method, Method::Sg | Method::SgBrute);
+    let spp = args.spp.unwrap_or(if is_sg {
+        scene.settings.sg.spp
+    } else {
+        scene.settings.spp
+    });
     if spp == 0 || spp > MAX_SPP {
         bail!("--spp must be between 1 and {MAX_SPP}, got {spp}");
     }
@@ -205,41 +248,134 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     }
 
     let r = scene.settings.reference;
-    let opts = RenderOptions {
-        width,
-        height,
-        spp,
-        seed,
-        direct: !args.indirect_only,
-        indirect: args.method == Method::Reference,
-        reflector_samples: r.reflector_samples,
-        bsdf_samples: r.bsdf_samples,
-        light_paths: r.light_paths,
+    let sgs = scene.settings.sg;
+    let cut = CutOptions {
+        threshold: args.threshold.unwrap_or(sgs.threshold),
+        max_cut: args.max_cut.unwrap_or(sgs.max_cut),
     };
-    let pb = progress::bar(work_units(&opts), "rendering", args.quiet);
+    if !(cut.threshold.is_finite() && (0.0..=1.0).contains(&cut.threshold)) {
+        bail!(
+            "--threshold must be between 0 and 1 (a fraction of the estimate), got {}",
+            cut.threshold
+        );
+    }
+    let cut_mode = args.cut.unwrap_or(sgs.cut);
+    let max_edge = args
+        .max_edge
+        .or(sgs.max_edge)
+        .unwrap_or_else(|| scene.mesh.diagonal() / 128.0);
+    if !(max_edge.is_finite() && max_edge >= 0.0) {
+        bail!("--max-edge must be a length ≥ 0 (0 = never split), got {max_edge}");
+    }
     let cancel = progress::interrupt_flag();
-    let done = |n: u64| pb.inc(n);
-    let prog = Progress {
-        done: &done,
-        cancel,
-    };
     let t = Instant::now();
-    let result = pool.install(|| render(&scene, &accel, &opts, &prog));
-    pb.finish_and_clear();
-    times.render = t.elapsed().as_secs_f64();
-    let Some((img, stats)) = result else {
-        eprintln!("interrupted: nothing was written");
-        return Ok(130);
+    let (img, reference_log, sg_log, nonfinite) = if is_sg {
+        let opts = SgOptions {
+            width,
+            height,
+            spp,
+            seed,
+            direct: !args.indirect_only,
+            indirect: true,
+            brute: args.method == Method::SgBrute,
+            cut,
+            mode: cut_mode,
+            max_edge,
+        };
+        let pb = progress::bar(sg_work_units(&opts), "rendering", args.quiet);
+        let done = |n: u64| pb.inc(n);
+        let prog = Progress {
+            done: &done,
+            cancel,
+        };
+        let result = pool.install(|| render_sg(&scene, &accel, &opts, &prog));
+        pb.finish_and_clear();
+        let Some((img, stats)) = result else {
+            eprintln!("interrupted: nothing was written");
+            return Ok(130);
+        };
+        let s = &stats;
+        log(format!(
+            "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
+            s.reflector_triangles,
+            s.reflector_pieces,
+            s.tree_nodes,
+            s.cut_size_mean,
+            s.cut_size_max,
+            s.nodes_evaluated_per_pixel,
+            s.leaves_evaluated_per_pixel,
+            s.visibility_rays
+        ));
+        log(format!(
+            "sg stages: tree {:.2} s, lighting {:.2} s, primary hits {:.2} s, vertex cuts {:.2} s, shading {:.2} s",
+            s.seconds.tree,
+            s.seconds.lighting,
+            s.seconds.primary,
+            s.seconds.vertex_cuts,
+            s.seconds.shading
+        ));
+        let nonfinite = stats.nonfinite_samples;
+        (
+            img,
+            None,
+            Some(SgLog {
+                visibility: args.visibility,
+                cut_mode,
+                cut,
+                max_edge,
+                stats,
+            }),
+            nonfinite,
+        )
+    } else {
+        let opts = RenderOptions {
+            width,
+            height,
+            spp,
+            seed,
+            direct: !args.indirect_only,
+            indirect: args.method == Method::Reference,
+            reflector_samples: r.reflector_samples,
+            bsdf_samples: r.bsdf_samples,
+            light_paths: r.light_paths,
+        };
+        let pb = progress::bar(work_units(&opts), "rendering", args.quiet);
+        let done = |n: u64| pb.inc(n);
+        let prog = Progress {
+            done: &done,
+            cancel,
+        };
+        let result = pool.install(|| render(&scene, &accel, &opts, &prog));
+        pb.finish_and_clear();
+        let Some((img, stats)) = result else {
+            eprintln!("interrupted: nothing was written");
+            return Ok(130);
+        };
+        let secs = t.elapsed().as_secs_f64().max(1e-9);
+        (
+            img,
+            Some(ReferenceLog {
+                reflector_samples: r.reflector_samples,
+                bsdf_samples: r.bsdf_samples,
+                light_paths_per_sample: r.light_paths,
+                camera_paths: stats.camera_paths,
+                light_paths: stats.light_paths,
+                rays: stats.rays,
+                paths_per_second: (stats.camera_paths + stats.light_paths) as f64 / secs,
+                rays_per_second: stats.rays as f64 / secs,
+                nonfinite_samples: stats.nonfinite_samples,
+            }),
+            None,
+            stats.nonfinite_samples,
+        )
     };
+    times.render = t.elapsed().as_secs_f64();
     if cancel.load(Ordering::SeqCst) {
         eprintln!("interrupted: nothing was written");
         return Ok(130);
     }
-    if stats.nonfinite_samples > 0 {
-        eprintln!(
-            "warning: {} samples were not finite and were dropped",
-            stats.nonfinite_samples
-        );
+    if nonfinite > 0 {
+        eprintln!("warning: {nonfinite} samples were not finite and were dropped");
     }
 
     let tm = Tonemap {
@@ -263,18 +399,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         spp,
         seed,
         threads,
-        reflector_samples: r.reflector_samples,
-        bsdf_samples: r.bsdf_samples,
-        light_paths_per_sample: r.light_paths,
         triangles: scene.mesh.indices.len(),
         tonemap: tm.describe(),
         seconds: times,
-        camera_paths: stats.camera_paths,
-        light_paths: stats.light_paths,
-        rays: stats.rays,
-        paths_per_second: (stats.camera_paths + stats.light_paths) as f64 / times.render.max(1e-9),
-        rays_per_second: stats.rays as f64 / times.render.max(1e-9),
-        nonfinite_samples: stats.nonfinite_samples,
+        reference: reference_log,
+        sg: sg_log,
     };
     let text = serde_json::to_string_pretty(&log_data)? + "\n";
     interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes())
@@ -285,15 +414,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         png.display(),
         tm.describe()
     ));
+    let speed = log_data
+        .reference
+        .as_ref()
+        .map(|r| {
+            format!(
+                "; {:.2} M paths/s, {:.2} M rays/s",
+                r.paths_per_second / 1e6,
+                r.rays_per_second / 1e6
+            )
+        })
+        .unwrap_or_default();
     log(format!(
-        "time: load {:.2} s, BVH {:.2} s, render {:.2} s, write {:.2} s, total {:.2} s; {:.2} M paths/s, {:.2} M rays/s",
-        times.load,
-        times.bvh,
-        times.render,
-        times.write,
-        times.total,
-        log_data.paths_per_second / 1e6,
-        log_data.rays_per_second / 1e6
+        "time: load {:.2} s, BVH {:.2} s, render {:.2} s, write {:.2} s, total {:.2} s{speed}",
+        times.load, times.bvh, times.render, times.write, times.total
     ));
     Ok(0)
 }

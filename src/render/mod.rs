@@ -1,4 +1,4 @@
-//! Renderers: the CPU reference and direct-light renderers, and pre-render sanity checks.
+//! Renderers: the CPU reference, direct-light and SG renderers, and pre-render sanity checks.
 
 pub mod checks;
 pub mod cpu;
@@ -11,4 +11,17 @@ pub enum Method {
     Reference,
     /// Direct light only, exact shadows.
     Direct,
+    /// The SG method: direct light + one bounce over a per-point cut of the reflector tree.
+    Sg,
+    /// The SG method over every reflector triangle (no tree): the cut's own yardstick.
+    SgBrute,
+}
+
+/// Visibility between reflectors and receivers (and from the light to reflectors) for `sg`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Visibility {
+    /// Shadow rays through the BVH: one per reflector triangle from the light, one per cut node
+    /// (or triangle) from the receiver.
+    Exact,
 }

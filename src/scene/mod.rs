@@ -24,6 +24,8 @@ pub const MAX_SEGMENTS: u32 = 65536;
 pub const MAX_SUBDIVISIONS: u32 = 4096;
 /// Upper bound on samples per pixel accepted from scene files and the command line.
 pub const MAX_SPP: u32 = 1 << 20;
+/// Largest accepted `methods.sg.max_cut`.
+pub const MAX_CUT: u32 = 1 << 24;
 
 /// Why a scene could not be loaded. Every message names the file and, where it applies, the field.
 #[derive(thiserror::Error, Debug)]
@@ -111,6 +113,12 @@ impl SceneMesh {
         a * (1.0 - u - v) + b * u + c * v
     }
 
+    /// Length of the bounding-box diagonal (0 for an empty mesh).
+    pub fn diagonal(&self) -> f32 {
+        let (lo, hi) = self.bounds();
+        (hi - lo).length()
+    }
+
     /// Axis-aligned bounds (min, max); zero box for an empty mesh.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         if self.positions.is_empty() {
@@ -134,6 +142,7 @@ pub struct RenderSettings {
     pub spp: u32,
     pub seed: u64,
     pub reference: ReferenceSpec,
+    pub sg: SgSpec,
 }
 
 /// A loaded, validated scene.
@@ -343,6 +352,39 @@ impl Builder {
                 "reflector_samples, bsdf_samples and light_paths cannot all be 0",
             ));
         }
+        let sg = file.methods.sg;
+        if !(sg.threshold.is_finite() && (0.0..=1.0).contains(&sg.threshold)) {
+            return Err(self.err(
+                "methods.sg.threshold",
+                format!(
+                    "must be between 0 and 1 (a fraction of the estimate), got {}",
+                    sg.threshold
+                ),
+            ));
+        }
+        if sg.max_cut > MAX_CUT {
+            return Err(self.err(
+                "methods.sg.max_cut",
+                format!(
+                    "must be between 0 (no cap) and {MAX_CUT}, got {}",
+                    sg.max_cut
+                ),
+            ));
+        }
+        if let Some(e) = sg.max_edge
+            && !(e.is_finite() && e >= 0.0)
+        {
+            return Err(self.err(
+                "methods.sg.max_edge",
+                format!("must be a length ≥ 0 (0 = never split), got {e}"),
+            ));
+        }
+        if sg.spp == 0 || sg.spp > MAX_SPP {
+            return Err(self.err(
+                "methods.sg.spp",
+                format!("must be between 1 and {MAX_SPP}, got {}", sg.spp),
+            ));
+        }
         Ok(Scene {
             name,
             path: self.path.clone(),
@@ -355,6 +397,7 @@ impl Builder {
                 spp: render.spp,
                 seed: render.seed,
                 reference: r,
+                sg,
             },
             inputs,
             warnings: self.warnings,

@@ -214,6 +214,55 @@ impl Default for RenderSpec {
 pub struct MethodsSpec {
     #[serde(default)]
     pub reference: ReferenceSpec,
+    #[serde(default)]
+    pub sg: SgSpec,
+}
+
+/// Settings of the SG method (`sg`, `sg-brute`).
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SgSpec {
+    /// Cut threshold: refine until every node's error bound is below this fraction of the
+    /// estimate (0.01 = 1 %).
+    #[serde(default = "default_threshold")]
+    pub threshold: f32,
+    /// Maximum nodes per cut; 0 = no cap.
+    #[serde(default = "default_max_cut")]
+    pub max_cut: u32,
+    /// Where cuts are chosen: "pixel" (every pixel sample) or "vertex" (every receiver vertex).
+    #[serde(default = "default_cut_mode")]
+    pub cut: crate::render::cpu::sg::CutMode,
+    /// Samples per pixel of the SG methods (the reference's count is `render.spp`).
+    #[serde(default = "one")]
+    pub spp: u32,
+    /// Reflector triangles are split until their longest edge is at most this many scene units;
+    /// 0 = never; absent = 1/128 of the scene's bounding-box diagonal.
+    #[serde(default)]
+    pub max_edge: Option<f32>,
+}
+
+fn default_threshold() -> f32 {
+    crate::cut::DEFAULT_THRESHOLD
+}
+
+fn default_max_cut() -> u32 {
+    crate::cut::DEFAULT_MAX_CUT
+}
+
+fn default_cut_mode() -> crate::render::cpu::sg::CutMode {
+    crate::render::cpu::sg::CutMode::Pixel
+}
+
+impl Default for SgSpec {
+    fn default() -> Self {
+        SgSpec {
+            threshold: default_threshold(),
+            max_cut: default_max_cut(),
+            cut: default_cut_mode(),
+            spp: 1,
+            max_edge: None,
+        }
+    }
 }
 
 /// Settings of the path-traced reference.

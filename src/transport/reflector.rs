@@ -4,6 +4,7 @@ use crate::brdf::Brdf;
 use crate::brdf::sg_fit::{MAX_LOBES, warped_lobes};
 use crate::math::Frame;
 use crate::math::sg::Sg;
+use crate::scene::Light;
 use glam::Vec3;
 
 /// A flat reflector triangle with its material.
@@ -75,19 +76,45 @@ pub fn reflected_sg(
     intensity: Vec3,
     visibility: f32,
 ) -> Option<ReflectedSg> {
+    reflected_sg_shaded(refl, None, light, intensity, visibility)
+}
+
+/// As [`reflected_sg`], with the triangle's vertex (shading) normals when it has them: the
+/// lobes are built about the mean shading normal, and widened by the spread of the mirror
+/// directions across the triangle (their variance is about 4 × the normals' 1 − R, R the
+/// length of the mean of the vertex normals), so that a faceted smooth surface reflects like the
+/// smooth surface the reference renders.
+pub fn reflected_sg_shaded(
+    refl: &Reflector,
+    normals: Option<[Vec3; 3]>,
+    light: Vec3,
+    intensity: Vec3,
+    visibility: f32,
+) -> Option<ReflectedSg> {
     let y = refl.centroid();
-    let mut n = refl.normal();
+    let ng = refl.normal();
     let to_light = light - y;
     let d2 = to_light.length_squared();
-    if n == Vec3::ZERO || !(d2 > 0.0) {
+    if ng == Vec3::ZERO || !(d2 > 0.0) {
         return None;
     }
     let wl = to_light / d2.sqrt();
-    if n.dot(wl) < 0.0 {
+    let flip = ng.dot(wl) < 0.0;
+    let (mut n, spread) = match normals {
+        Some(ns) => {
+            let m = (ns[0] + ns[1] + ns[2]) / 3.0;
+            match m.try_normalize() {
+                Some(u) if u.dot(ng) > 0.0 => (u, 4.0 * (1.0 - m.length().min(1.0))),
+                _ => (ng, 0.0),
+            }
+        }
+        None => (ng, 0.0),
+    };
+    if flip {
         n = -n;
     }
     let cos_l = n.dot(wl);
-    if !(cos_l > 0.0) {
+    if !(cos_l > 0.0) || (if flip { -ng } else { ng }).dot(wl) <= 0.0 {
         return None;
     }
     let e = intensity * (visibility * cos_l / d2);
@@ -97,6 +124,12 @@ pub fn reflected_sg(
     for l in lobes.iter_mut().take(b.len) {
         l.axis = frame.to_world(l.axis);
         l.amplitude *= e;
+        if spread > 0.0 {
+            // Convolution with the spread keeps the lobe's energy μ/λ.
+            let wide = 1.0 / (1.0 / l.sharpness.max(1e-12) + spread);
+            l.amplitude *= wide / l.sharpness.max(1e-12);
+            l.sharpness = wide;
+        }
     }
     Some(ReflectedSg {
         diffuse: b.diffuse * e,
@@ -106,6 +139,45 @@ pub fn reflected_sg(
         origin: y,
         light,
     })
+}
+
+/// As [`reflected_sg`] for any scene light (point, spot or directional), lit with the incident
+/// light at the centroid times `visibility`. A directional light is placed at a far point along
+/// its direction (10⁵ × `scale`, `scale` a length of the scene), so that the mirror-image
+/// refinement degenerates to the constant mirror direction it should give.
+pub fn reflected_sg_light(
+    refl: &Reflector,
+    light: &Light,
+    visibility: f32,
+    scale: f32,
+) -> Option<ReflectedSg> {
+    reflected_sg_light_shaded(refl, None, light, visibility, scale)
+}
+
+/// [`reflected_sg_light`] with vertex normals (see [`reflected_sg_shaded`]).
+pub fn reflected_sg_light_shaded(
+    refl: &Reflector,
+    normals: Option<[Vec3; 3]>,
+    light: &Light,
+    visibility: f32,
+    scale: f32,
+) -> Option<ReflectedSg> {
+    let y = refl.centroid();
+    let inc = light.incident(y)?;
+    let dist = if inc.dist.is_finite() {
+        inc.dist
+    } else {
+        1e5 * scale.max(1e-3)
+    };
+    let pos = y + inc.wi * dist;
+    // reflected_sg divides the intensity by d²; hand it the irradiance times d².
+    reflected_sg_shaded(
+        refl,
+        normals,
+        pos,
+        inc.irradiance * (dist * dist),
+        visibility,
+    )
 }
 
 /// The mirror-image refinement for a receiver at `x`: the light reflected by a flat triangle

@@ -191,6 +191,11 @@ pub fn variants() -> Vec<(Aim, ReceiverOptions, &'static str)> {
             "centroid aim, cos as SG",
         ),
         (
+            Aim::Centroid,
+            o(CosineMode::Moment),
+            "centroid aim, exact cos (moment)",
+        ),
+        (
             Aim::MirrorImage,
             o(CosineMode::TriangleCentroid),
             "mirror-image aim, cos at triangle centroid",
@@ -199,6 +204,11 @@ pub fn variants() -> Vec<(Aim, ReceiverOptions, &'static str)> {
             Aim::MirrorImage,
             o(CosineMode::LobeAxis),
             "mirror-image aim, cos at lobe axis",
+        ),
+        (
+            Aim::MirrorImage,
+            o(CosineMode::Moment),
+            "mirror-image aim, exact cos (moment)",
         ),
     ]
 }

@@ -1,0 +1,589 @@
+//! The SG renderer on the CPU (Xu et al. 2014): direct light with exact shadows plus one bounce of
+//! indirect light from spherical-Gaussian transport, either over a per-point cut of the reflector
+//! tree (`sg`) or over every reflector triangle (`sg-brute`). Visibility between reflectors and
+//! receivers is exact here: one shadow ray per cut node (to its representative triangle) or per
+//! triangle.
+//!
+//! Stages: tree build → per light, light every reflector triangle (exact shadow ray at its
+//! centroid) and sum up the tree → primary hits → cut selection (per pixel sample, or per
+//! receiver vertex) → shading. Each stage is timed; see [`SgStats`].
+
+use super::reference::Progress;
+use super::surface::{SurfacePoint, ray_epsilon, reflected_light};
+use crate::accel::{Accel, Hit};
+use crate::cut::{
+    CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, build_tree, light_anchor,
+    light_triangles, reflector_pieces,
+};
+use crate::image::Image;
+use crate::precompute::tree;
+use crate::scene::Scene;
+use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
+use glam::{DVec3, Vec2, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Where cuts are selected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+#[derive(clap::ValueEnum)]
+pub enum CutMode {
+    /// One cut per pixel sample, at the shaded point.
+    Pixel,
+    /// One cut per receiver vertex (the paper's scheme); a pixel sample evaluates the cut of
+    /// its triangle's nearest vertex at its own position.
+    Vertex,
+}
+
+/// Options of [`render_sg`].
+#[derive(Clone, Copy, Debug)]
+pub struct SgOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel (1: the pixel centre; more: a stratified grid, or keyed random
+    /// positions when not a square number).
+    pub spp: u32,
+    pub seed: u64,
+    pub direct: bool,
+    pub indirect: bool,
+    /// Every reflector triangle instead of a cut (`sg-brute`).
+    pub brute: bool,
+    pub cut: CutOptions,
+    pub mode: CutMode,
+    /// Reflector triangles are split until their longest edge is at most this (0: never).
+    pub max_edge: f32,
+}
+
+/// Seconds per stage.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct SgTimes {
+    pub tree: f64,
+    pub lighting: f64,
+    pub primary: f64,
+    pub vertex_cuts: f64,
+    pub shading: f64,
+}
+
+/// Statistics of an SG render.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct SgStats {
+    pub reflector_triangles: usize,
+    /// Reflector triangles after splitting to `max_edge` (what the tree is built over).
+    pub reflector_pieces: usize,
+    pub tree_nodes: usize,
+    /// Receiver points shaded (pixel samples hitting a receiver, per light).
+    pub shading_points: u64,
+    /// Cuts selected (per pixel sample or per vertex, per light).
+    pub cuts: u64,
+    pub cut_size_mean: f64,
+    pub cut_size_max: u64,
+    /// Nodes whose bound and approximation were evaluated, per pixel (all samples and lights,
+    /// including vertex cuts shared out over the pixels).
+    pub nodes_evaluated_per_pixel: f64,
+    /// Of those, exact triangle integrations (leaves, or every triangle for `sg-brute`).
+    pub leaves_evaluated_per_pixel: f64,
+    /// Shadow rays between receivers and reflectors.
+    pub visibility_rays: u64,
+    pub nonfinite_samples: u64,
+    pub seconds: SgTimes,
+}
+
+#[derive(Default)]
+struct Tally {
+    shading_points: AtomicU64,
+    cuts: AtomicU64,
+    cut_size_sum: AtomicU64,
+    cut_size_max: AtomicU64,
+    evaluated: AtomicU64,
+    leaves: AtomicU64,
+    rays: AtomicU64,
+    bad: AtomicU64,
+}
+
+impl Tally {
+    fn add_cut(&self, size: usize, c: &CutCounters) {
+        self.cuts.fetch_add(1, Ordering::Relaxed);
+        self.cut_size_sum.fetch_add(size as u64, Ordering::Relaxed);
+        self.cut_size_max.fetch_max(size as u64, Ordering::Relaxed);
+        self.add_counters(c);
+    }
+    fn add_counters(&self, c: &CutCounters) {
+        self.evaluated.fetch_add(c.evaluated, Ordering::Relaxed);
+        self.leaves.fetch_add(c.leaves, Ordering::Relaxed);
+    }
+}
+
+/// Sub-pixel position of sample `s` of `spp` in pixel `pixel`.
+fn sample_offset(spp: u32, s: u32, seed: u64, pixel: u64) -> Vec2 {
+    if spp == 1 {
+        return Vec2::splat(0.5);
+    }
+    let k = (spp as f32).sqrt().round() as u32;
+    let mut rng = crate::math::Rng::keyed(seed, pixel, s as u64);
+    let j = rng.vec2();
+    if k * k == spp {
+        Vec2::new(
+            ((s % k) as f32 + j.x) / k as f32,
+            ((s / k) as f32 + j.y) / k as f32,
+        )
+    } else {
+        j
+    }
+}
+
+/// Work units of [`render_sg`] for a progress bar: one per image row and pass.
+pub fn sg_work_units(opts: &SgOptions) -> u64 {
+    opts.height as u64 * if opts.mode == CutMode::Vertex { 2 } else { 1 }
+}
+
+/// Renders `scene` with the SG method. `None` when cancelled.
+pub fn render_sg(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &SgOptions,
+    progress: &Progress,
+) -> Option<(Image, SgStats)> {
+    let mut stats = SgStats::default();
+    let eps = ray_epsilon(scene);
+    let t = Instant::now();
+    let pieces = if opts.indirect {
+        reflector_pieces(scene, opts.max_edge)
+    } else {
+        Vec::new()
+    };
+    let tree = build_tree(scene, &pieces);
+    stats.seconds.tree = t.elapsed().as_secs_f64();
+    stats.reflector_triangles = scene
+        .objects
+        .iter()
+        .filter(|o| o.reflector)
+        .map(|o| o.tri_count as usize)
+        .sum();
+    stats.reflector_pieces = pieces.len();
+    stats.tree_nodes = tree.nodes.len();
+    let brute = opts.brute || !tree::needs_tree(tree.tri_order.len());
+
+    // Light every reflector triangle, per light, with an exact shadow ray at its centroid.
+    let t = Instant::now();
+    let rx_opts = ReceiverOptions::default();
+    let lits: Vec<LitScene> = if opts.indirect && !tree.is_empty() {
+        scene
+            .lights
+            .iter()
+            .map(|light| {
+                let visible = |c: Vec3, _t: u32| -> f32 {
+                    if light_visible(accel, light, c, eps) {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                };
+                let tris = light_triangles(scene, &pieces, &tree.tri_order, light, &visible);
+                LitScene::new(&tree, tris, light_anchor(scene, light), rx_opts)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    stats.seconds.lighting = t.elapsed().as_secs_f64();
+
+    let camera = scene.camera.with_resolution(opts.width, opts.height);
+    let w = opts.width as usize;
+    let n_px = w * opts.height as usize;
+    let spp = opts.spp as usize;
+    // Primary hits of every sample.
+    let t = Instant::now();
+    let hits: Vec<Option<Hit>> = (0..n_px * spp)
+        .into_par_iter()
+        .map(|i| {
+            let (p, s) = (i / spp, i % spp);
+            let o = sample_offset(opts.spp, s as u32, opts.seed, p as u64);
+            let dir = camera.ray_dir((p % w) as f32 + o.x, (p / w) as f32 + o.y);
+            accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
+        })
+        .collect();
+    stats.seconds.primary = t.elapsed().as_secs_f64();
+
+    let tally = Tally::default();
+    let ctx = Ctx {
+        scene,
+        accel,
+        eps,
+        lits: &lits,
+        opts,
+        brute,
+        camera_pos: camera.position,
+    };
+
+    // Vertex cuts: one per light and receiver vertex seen by some sample.
+    let t = Instant::now();
+    let vertex_cuts = if opts.mode == CutMode::Vertex && !brute && !lits.is_empty() {
+        let cuts = ctx.vertex_cuts(&hits, &tally, progress)?;
+        Some(cuts)
+    } else {
+        None
+    };
+    stats.seconds.vertex_cuts = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut img = Image::new(opts.width, opts.height);
+    img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        if progress.cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        let mut scratch = Vec::new();
+        for (x, out) in row.iter_mut().enumerate() {
+            let p = y * w + x;
+            let mut sum = DVec3::ZERO;
+            for s in 0..spp {
+                let v = ctx.shade(
+                    hits[p * spp + s].as_ref(),
+                    vertex_cuts.as_ref(),
+                    &mut scratch,
+                    &tally,
+                );
+                if v.is_finite() {
+                    sum += v.as_dvec3();
+                } else {
+                    tally.bad.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+            *out = (sum / spp as f64).as_vec3();
+        }
+        (progress.done)(1);
+    });
+    stats.seconds.shading = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
+    let cuts = tally.cuts.into_inner();
+    stats.shading_points = tally.shading_points.into_inner();
+    stats.cuts = cuts;
+    stats.cut_size_mean = tally.cut_size_sum.into_inner() as f64 / cuts.max(1) as f64;
+    stats.cut_size_max = tally.cut_size_max.into_inner();
+    stats.nodes_evaluated_per_pixel = tally.evaluated.into_inner() as f64 / n_px as f64;
+    stats.leaves_evaluated_per_pixel = tally.leaves.into_inner() as f64 / n_px as f64;
+    stats.visibility_rays = tally.rays.into_inner();
+    stats.nonfinite_samples = tally.bad.into_inner();
+    Some((img, stats))
+}
+
+/// Whether `light` reaches the surface point `p` (offset along the light direction: `p` lies on
+/// its triangle).
+fn light_visible(accel: &Accel, light: &crate::scene::Light, p: Vec3, eps: f32) -> bool {
+    let Some(inc) = light.incident(p) else {
+        return false;
+    };
+    let tmax = if inc.dist.is_finite() {
+        inc.dist * (1.0 - 1e-5) - eps
+    } else {
+        f32::INFINITY
+    };
+    accel.unoccluded(p + inc.wi * eps, inc.wi, 0.0, tmax)
+}
+
+/// Cuts per light and vertex: `cuts[light][vertex]` (empty for vertices no sample needs).
+type VertexCuts = Vec<Vec<Vec<u32>>>;
+
+struct Ctx<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    eps: f32,
+    lits: &'a [LitScene<'a>],
+    opts: &'a SgOptions,
+    brute: bool,
+    camera_pos: Vec3,
+}
+
+impl Ctx<'_> {
+    /// Is the segment from the receiver (offset point `xo`) to `target` on a reflector free?
+    fn visible(&self, xo: Vec3, target: Vec3) -> bool {
+        let d = target - xo;
+        let len = d.length();
+        if !(len > 0.0) {
+            return false;
+        }
+        self.accel
+            .unoccluded(xo, d / len, 0.0, len * (1.0 - 1e-4) - self.eps)
+    }
+
+    fn rep_point(&self, lit: &LitScene, node: u32) -> Vec3 {
+        let pos = lit.nodes[node as usize].rep;
+        let v = lit.tris[pos as usize].vertices;
+        (v[0] + v[1] + v[2]) / 3.0
+    }
+
+    /// Visibility factor of a reflector triangle seen from the receiver (offset point `xo`),
+    /// correlated with the light's visibility on the triangle, whose mean V̄ the triangle's lobes
+    /// already carry. Points p_k: the four the light's visibility was sampled at, plus the point
+    /// the receiver's main lobe looks at (its axis through the triangle's plane, clamped into the
+    /// triangle). With weights w_k = the receiver's BRDF towards p_k (luminance; diffuse part plus
+    /// lobes), the factor is Σ w_k V_x(p_k) V_l(p_k) / (V̄ Σ w_k): a wide receiver lobe averages
+    /// the points (≤ 1), a sharp one follows its own point — the specular point of a
+    /// half-shadowed floor triangle is either fully lit or dark, not half lit. Returns
+    /// (factor, rays).
+    fn triangle_visibility(
+        &self,
+        xo: Vec3,
+        t: &LitTriangle,
+        light: &crate::scene::Light,
+        rx: &ReceiverLobes,
+    ) -> (f32, u64) {
+        let [a, b, c] = t.vertices;
+        let mut rays = 0;
+        let weight = |p: Vec3| -> f32 {
+            let d = (p - xo).normalize_or_zero();
+            let f = rx.lobes().iter().fold(rx.diffuse, |acc, h| acc + h.eval(d));
+            crate::cut::luminance(f).max(0.0)
+        };
+        let (mut num, mut den) = (0.0f32, 0.0f32);
+        for (k, &p) in t.visibility_points().iter().enumerate() {
+            let w = weight(p);
+            den += w;
+            if w > 0.0 && t.light_mask & (1 << k) != 0 {
+                rays += 1;
+                if self.visible(xo, p) {
+                    num += w;
+                }
+            }
+        }
+        if let Some(h) = rx.lobes().first() {
+            let n = (b - a).cross(c - a);
+            let denom = n.dot(h.axis);
+            let s = if denom.abs() > 1e-20 {
+                n.dot(a - xo) / denom
+            } else {
+                -1.0
+            };
+            let p = if s > 0.0 {
+                closest_point_on_triangle(xo + h.axis * s, a, b, c)
+            } else {
+                closest_point_on_triangle(xo, a, b, c)
+            };
+            let w = weight(p);
+            den += w;
+            if w > 0.0 {
+                rays += 1;
+                let lit = t.light_visibility >= 1.0 || {
+                    rays += 1;
+                    light_visible(self.accel, light, p, self.eps)
+                };
+                if lit && self.visible(xo, p) {
+                    num += w;
+                }
+            }
+        }
+        if !(den > 0.0) || !(t.light_visibility > 0.0) {
+            return (0.0, rays);
+        }
+        (num / (den * t.light_visibility), rays)
+    }
+
+    /// Radiance of one pixel sample.
+    fn shade(
+        &self,
+        hit: Option<&Hit>,
+        vertex_cuts: Option<&VertexCuts>,
+        scratch: &mut Vec<CutEntry>,
+        tally: &Tally,
+    ) -> Vec3 {
+        let Some(hit) = hit else {
+            return Vec3::ZERO;
+        };
+        let wo = (self.camera_pos - self.scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+        let Some(sp) = SurfacePoint::from_hit(self.scene, hit, wo) else {
+            return Vec3::ZERO;
+        };
+        let brdf = self.scene.tri_material(hit.tri);
+        let mut l = Vec3::ZERO;
+        if self.opts.direct {
+            for light in &self.scene.lights {
+                l += reflected_light(self.accel, brdf, &sp, wo, light, self.eps);
+            }
+        }
+        if !self.opts.indirect || !self.scene.tri_object(hit.tri).receiver {
+            return l;
+        }
+        let rx = ReceiverLobes::new(brdf, sp.frame.n, wo);
+        if rx.is_black() {
+            return l;
+        }
+        let xo = sp.offset(self.eps);
+        let mut rays = 0u64;
+        for (k, lit) in self.lits.iter().enumerate() {
+            tally.shading_points.fetch_add(1, Ordering::Relaxed);
+            if self.brute {
+                let mut c = CutCounters::default();
+                for t in &lit.tris {
+                    if t.sg.is_none() {
+                        continue;
+                    }
+                    c.evaluated += 1;
+                    c.leaves += 1;
+                    let v = t.shade(sp.p, &rx, &lit.receiver);
+                    if v != Vec3::ZERO {
+                        let light = &self.scene.lights[k];
+                        let (f, r) = self.triangle_visibility(xo, t, light, &rx);
+                        rays += r;
+                        l += v * f;
+                    }
+                }
+                tally.add_counters(&c);
+                continue;
+            }
+            let mut c = CutCounters::default();
+            match vertex_cuts {
+                Some(vc) => {
+                    let vid = nearest_vertex(self.scene, hit);
+                    let nodes = &vc[k][vid as usize];
+                    lit.evaluate(nodes.iter().copied(), sp.p, &rx, scratch, &mut c);
+                    tally.add_counters(&c);
+                }
+                None => {
+                    lit.select(sp.p, &rx, &self.opts.cut, scratch, &mut c);
+                    tally.add_cut(scratch.len(), &c);
+                }
+            }
+            for e in scratch.iter() {
+                if e.value == Vec3::ZERO {
+                    continue;
+                }
+                let n = &lit.tree.nodes[e.node as usize];
+                if n.is_leaf() {
+                    let t = &lit.tris[n.first as usize];
+                    let light = &self.scene.lights[k];
+                    let (f, r) = self.triangle_visibility(xo, t, light, &rx);
+                    rays += r;
+                    l += e.value * f;
+                } else {
+                    rays += 1;
+                    if self.visible(xo, self.rep_point(lit, e.node)) {
+                        l += e.value;
+                    }
+                }
+            }
+        }
+        tally.rays.fetch_add(rays, Ordering::Relaxed);
+        l
+    }
+
+    /// Selects a cut at every receiver vertex that some sample's nearest vertex is.
+    fn vertex_cuts(
+        &self,
+        hits: &[Option<Hit>],
+        tally: &Tally,
+        progress: &Progress,
+    ) -> Option<VertexCuts> {
+        let mesh = &self.scene.mesh;
+        // The triangle each needed vertex is shaded with (its material and orientation).
+        let mut owner: Vec<u32> = vec![u32::MAX; mesh.positions.len()];
+        for h in hits.iter().flatten() {
+            if self.scene.tri_object(h.tri).receiver {
+                owner[nearest_vertex(self.scene, h) as usize] = h.tri;
+            }
+        }
+        let needed: Vec<u32> = (0..owner.len() as u32)
+            .filter(|&v| owner[v as usize] != u32::MAX)
+            .collect();
+        let mut out = Vec::new();
+        let rows = self.opts.height as u64;
+        let per_row = needed.len().div_ceil(rows.max(1) as usize).max(1);
+        for lit in self.lits {
+            let mut cuts: Vec<Vec<u32>> = vec![Vec::new(); mesh.positions.len()];
+            let chunks: Vec<Vec<(u32, Vec<u32>)>> = needed
+                .par_chunks(per_row)
+                .map(|chunk| {
+                    let mut scratch = Vec::new();
+                    let mut res = Vec::with_capacity(chunk.len());
+                    if progress.cancel.load(Ordering::Relaxed) {
+                        return res;
+                    }
+                    for &v in chunk {
+                        let tri = owner[v as usize];
+                        let p = mesh.positions[v as usize];
+                        let wo = (self.camera_pos - p).normalize_or_zero();
+                        let mut ng = mesh.tri_cross(tri).normalize_or_zero();
+                        let mut n = mesh.normals[v as usize];
+                        if ng.dot(wo) < 0.0 {
+                            ng = -ng;
+                            n = -n;
+                        }
+                        if !(n.dot(ng) > 0.0) {
+                            n = ng;
+                        }
+                        let rx = ReceiverLobes::new(self.scene.tri_material(tri), n, wo);
+                        let mut c = CutCounters::default();
+                        lit.select(p, &rx, &self.opts.cut, &mut scratch, &mut c);
+                        tally.add_cut(scratch.len(), &c);
+                        let mut nodes: Vec<u32> = scratch.iter().map(|e| e.node).collect();
+                        if nodes.is_empty() {
+                            // A black receiver at the vertex: shade pixels with the root.
+                            nodes.push(0);
+                        }
+                        res.push((v, nodes));
+                    }
+                    if self.lits.len() == 1 {
+                        (progress.done)(1);
+                    }
+                    res
+                })
+                .collect();
+            for (v, nodes) in chunks.into_iter().flatten() {
+                cuts[v as usize] = nodes;
+            }
+            out.push(cuts);
+        }
+        if progress.cancel.load(Ordering::Relaxed) {
+            return None;
+        }
+        Some(out)
+    }
+}
+
+/// The vertex of the hit triangle with the largest barycentric weight.
+fn nearest_vertex(scene: &Scene, h: &Hit) -> u32 {
+    let idx = scene.mesh.indices[h.tri as usize];
+    let w = [1.0 - h.u - h.v, h.u, h.v];
+    let k = if w[0] >= w[1] && w[0] >= w[2] {
+        0
+    } else if w[1] >= w[2] {
+        1
+    } else {
+        2
+    };
+    idx[k]
+}
+
+/// The point of triangle (a, b, c) closest to p (Ericson, Real-Time Collision Detection, 5.1.5).
+fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
