@@ -10,7 +10,8 @@
 # - frame time and tree build time against triangle count (dragon 11k, 48k, 202k, 871k; the
 #   871k model is fetched by scripts/fetch-models.sh and skipped when missing).
 #
-#   scripts/sg-cpu-results.sh     (about 15 min, plus about 20 min per scene without references)
+#   scripts/sg-cpu-results.sh     (about 45 min, plus about 20 min per scene without references;
+#                                  KEEP_BRUTE=1 reuses the sg-brute renders: about 5 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ref_spp="${REF_SPP:-4096}"
@@ -37,9 +38,14 @@ for scene in ring bunny dragon; do
     esac
     # Brute force on the 202k dragon at 64 px would take an hour: measured at 32 px below.
     if [ "$scene" = dragon ] && [ "$method" = sg-brute ]; then continue; fi
-    echo "== $scene $method"
-    "$bin" render "scenes/$scene.toml" "${args[@]}" --indirect-only --width 64 --spp 16 \
-      --output "$out/$scene-$method.exr" --quiet
+    # KEEP_BRUTE=1 keeps existing sg-brute renders (15-20 min each; the cut does not change them).
+    if [ "$method" = sg-brute ] && [ "${KEEP_BRUTE:-0}" = 1 ] && [ -f "$out/$scene-$method.exr" ]; then
+      echo "== $scene $method (kept)"
+    else
+      echo "== $scene $method"
+      "$bin" render "scenes/$scene.toml" "${args[@]}" --indirect-only --width 64 --spp 16 \
+        --output "$out/$scene-$method.exr" --quiet
+    fi
     "$bin" compare "$out/$scene-$method.exr" "$out/$scene-reference-s1.exr" --json \
       --error-map "$out/$scene-$method-error.png" > "$out/$scene-$method-metrics.json"
   done
@@ -47,8 +53,10 @@ done
 echo "== dragon sg vs sg-brute (32 px, 1 spp)"
 "$bin" render scenes/dragon.toml --method sg --indirect-only --width 32 --spp 1 \
   --output "$out/dragon32-sg.exr" --quiet
-"$bin" render scenes/dragon.toml --method sg-brute --indirect-only --width 32 --spp 1 \
-  --output "$out/dragon32-sg-brute.exr" --quiet
+if [ "${KEEP_BRUTE:-0}" != 1 ] || [ ! -f "$out/dragon32-sg-brute.exr" ]; then
+  "$bin" render scenes/dragon.toml --method sg-brute --indirect-only --width 32 --spp 1 \
+    --output "$out/dragon32-sg-brute.exr" --quiet
+fi
 "$bin" compare "$out/dragon32-sg.exr" "$out/dragon32-sg-brute.exr" --json \
   --error-map "$out/dragon32-error.png" > "$out/dragon32-metrics.json"
 for size in 11k 48k 202k 871k; do

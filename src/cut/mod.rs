@@ -127,10 +127,6 @@ pub struct NodeLobe {
     pub axis_sum: Vec3,
     /// Σ w_i / λ_i: the weighted mean of 1/λ (the lobe's angular variance).
     pub inv_sharpness_sum: f32,
-    /// Σ A_i μ_i (peak radiance × area), RGB: for the bound.
-    pub peak: Vec3,
-    /// min_i λ_i (∞ when empty): for the bound.
-    pub min_sharpness: f32,
 }
 
 /// The lit state of one tree node: sums over its triangles.
@@ -154,6 +150,11 @@ pub struct LitNode {
     pub rep: u32,
     /// luminance of the representative's peak power.
     pub rep_power: f32,
+    /// Σ A_i μ_ik (peak radiance × area, RGB) of every lobe, binned by its sharpness: bin b holds
+    /// the lobes with λ ≥ [`SHARPNESS_BINS`][b] (and below the next edge). The bound lets each
+    /// bin fall off with its lower edge, so one wide lobe does not loosen the bound of the sharp
+    /// ones.
+    pub peak_by_sharpness: [Vec3; SHARPNESS_BINS.len()],
     /// Bounding box of the light's mirror images in the planes of the triangles with lobes
     /// (empty: min > max): every such triangle's lobes, re-aimed at a receiver x, peak towards
     /// x → its image.
@@ -175,8 +176,19 @@ impl Default for LitNode {
             rep_power: 0.0,
             image_min: Vec3::splat(f32::INFINITY),
             image_max: Vec3::splat(f32::NEG_INFINITY),
+            peak_by_sharpness: [Vec3::ZERO; SHARPNESS_BINS.len()],
         }
     }
+}
+
+/// Lower edges of the sharpness bins of [`LitNode::peak_by_sharpness`].
+pub const SHARPNESS_BINS: [f32; 6] = [0.0, 2.0, 8.0, 32.0, 128.0, 512.0];
+
+fn sharpness_bin(lambda: f32) -> usize {
+    SHARPNESS_BINS
+        .iter()
+        .rposition(|&edge| lambda >= edge)
+        .unwrap_or(0)
 }
 
 impl Default for NodeLobe {
@@ -186,8 +198,6 @@ impl Default for NodeLobe {
             weight: 0.0,
             axis_sum: Vec3::ZERO,
             inv_sharpness_sum: 0.0,
-            peak: Vec3::ZERO,
-            min_sharpness: f32::INFINITY,
         }
     }
 }
@@ -225,9 +235,8 @@ impl LitNode {
                 weight: wk,
                 axis_sum: l.axis * wk,
                 inv_sharpness_sum: wk / lam,
-                peak: amp,
-                min_sharpness: l.sharpness.max(0.0),
             };
+            n.peak_by_sharpness[sharpness_bin(l.sharpness.max(0.0))] += amp;
         }
         n
     }
@@ -241,8 +250,6 @@ impl LitNode {
                 weight: x.weight + y.weight,
                 axis_sum: x.axis_sum + y.axis_sum,
                 inv_sharpness_sum: x.inv_sharpness_sum + y.inv_sharpness_sum,
-                peak: x.peak + y.peak,
-                min_sharpness: x.min_sharpness.min(y.min_sharpness),
             };
         }
         let (rep, rep_power) = if b.rep_power > a.rep_power {
@@ -262,6 +269,9 @@ impl LitNode {
             rep_power,
             image_min: a.image_min.min(b.image_min),
             image_max: a.image_max.max(b.image_max),
+            peak_by_sharpness: std::array::from_fn(|k| {
+                a.peak_by_sharpness[k] + b.peak_by_sharpness[k]
+            }),
         }
     }
 }
@@ -625,17 +635,25 @@ fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
         _ => None,
     };
     let mut radiance = lit.diffuse;
-    for l in &lit.lobes {
+    for (edge, peak) in SHARPNESS_BINS.iter().zip(&lit.peak_by_sharpness) {
         let f = match gap {
-            Some(g) if l.min_sharpness.is_finite() => {
-                (l.min_sharpness * (g.cos() - 1.0)).min(0.0).exp()
-            }
-            _ => 1.0,
+            Some(g) => (edge * (g.cos() - 1.0)).min(0.0).exp(),
+            None => 1.0,
         };
-        radiance += l.peak * f;
+        radiance += *peak * f;
     }
+    // Each triangle's solid angle is ∫ cos θ_y / r² dA ≤ A cos_max / d²: the largest |cos| between
+    // a normal of the cone (either orientation) and a direction from the box to x.
+    let cos_max = match (cone, n.cone) {
+        (Some((dir, half)), Some(c)) => {
+            let g = angle(c.axis, dir);
+            let g = g.min(std::f32::consts::PI - g);
+            (g - c.half_angle - half).max(0.0).cos()
+        }
+        _ => 1.0,
+    };
     // 1e-3: headroom for the rounding of the f32 sums and of the quadrature (≤ 5e-7 relative).
-    radiance * hmax * (1.001 / d2)
+    radiance * hmax * (1.001 * cos_max / d2)
 }
 
 /// E[max(0, n·ω)] under a lobe whose axis has n·p = `c` and sharpness λ: n·ω is treated as
