@@ -7,8 +7,11 @@ use divan::{Bencher, black_box};
 use glam::Vec3;
 use interreflect::accel::Accel;
 use interreflect::cut::{
-    CutCounters, CutOptions, LitScene, build_tree, light_anchor, light_triangles, reflector_pieces,
+    CutCounters, CutOptions, LitScene, ReflectorPiece, build_tree, light_anchor, light_triangles,
+    reflector_pieces,
 };
+use interreflect::precompute::tree::ReflectorTree;
+use interreflect::render::cpu::surface::{light_visible, ray_epsilon};
 use interreflect::scene::Scene;
 use interreflect::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use std::path::Path;
@@ -19,32 +22,33 @@ fn main() {
 
 const SCENES: [&str; 3] = ["dragon-11k", "dragon-48k", "dragon"];
 
-fn load(name: &str) -> Scene {
+/// An evaluation scene with its BVH, reflector pieces (the default split) and tree.
+fn setup(name: &str) -> (Scene, Accel, Vec<ReflectorPiece>, ReflectorTree) {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
-    Scene::load(&p).expect("evaluation scene")
+    let scene = Scene::load(&p).expect("evaluation scene");
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let pieces = reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);
+    let tree = build_tree(&scene, &pieces);
+    (scene, accel, pieces, tree)
 }
 
 #[divan::bench(args = SCENES, sample_count = 5)]
 fn tree_build(bencher: Bencher, name: &str) {
-    let scene = load(name);
-    let pieces = reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);
+    let (scene, _, pieces, _) = setup(name);
     bencher.bench(|| build_tree(&scene, black_box(&pieces)));
 }
 
 #[divan::bench(args = SCENES, sample_count = 5)]
 fn lighting(bencher: Bencher, name: &str) {
-    let scene = load(name);
-    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-    let pieces = reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);
-    let tree = build_tree(&scene, &pieces);
+    let (scene, accel, pieces, tree) = setup(name);
     let light = scene.lights[0];
-    let eps = scene.mesh.diagonal() * 1e-5;
+    let eps = ray_epsilon(&scene);
     let visible = |p: Vec3, _t: u32| -> f32 {
-        let Some(inc) = light.incident(p) else {
-            return 0.0;
-        };
-        let ok = accel.unoccluded(p + inc.wi * eps, inc.wi, 0.0, inc.dist * (1.0 - 1e-5) - eps);
-        if ok { 1.0 } else { 0.0 }
+        if light_visible(&accel, &light, p, eps) {
+            1.0
+        } else {
+            0.0
+        }
     };
     bencher.bench(|| {
         light_triangles(
@@ -59,10 +63,7 @@ fn lighting(bencher: Bencher, name: &str) {
 
 #[divan::bench(args = SCENES, sample_count = 20)]
 fn cut_selection(bencher: Bencher, name: &str) {
-    let scene = load(name);
-    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-    let pieces = reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);
-    let tree = build_tree(&scene, &pieces);
+    let (scene, accel, pieces, tree) = setup(name);
     let light = scene.lights[0];
     let none = |_: Vec3, _: u32| 1.0;
     let tris = light_triangles(&scene, &pieces, &tree.tri_order, &light, &none);

@@ -330,7 +330,7 @@ fn reference_is_bit_identical_for_one_and_two_threads() {
 #[test]
 fn sg_two_squares_one_bounce_matches_quadrature() {
     use interreflect::cut::CutOptions;
-    use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg};
+    use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
     let text = TWO_SQUARES.replace(
         "shape = { type = \"plane\", size = [1.0, 1.0] }\ntransform = { translate = [0.5, 0.0, 0.5] }",
         "shape = { type = \"plane\", size = [1.0, 1.0], subdivisions = 32 }\ntransform = { translate = [0.5, 0.0, 0.5] }",
@@ -354,13 +354,7 @@ fn sg_two_squares_one_bounce_matches_quadrature() {
             mode,
             max_edge: 0.0,
         };
-        let cancel = std::sync::atomic::AtomicBool::new(false);
-        let done = |_: u64| {};
-        let prog = interreflect::render::cpu::Progress {
-            done: &done,
-            cancel: &cancel,
-        };
-        let (img, stats) = render_sg(&scene, &accel, &o, &prog).expect("not cancelled");
+        let (img, stats) = render_sg_quiet(&scene, &accel, &o);
         assert!(stats.cut_size_mean > 1.0 && stats.cut_size_max <= 1000);
         let mut worst = 0.0f64;
         for (px, py) in [
@@ -391,7 +385,7 @@ fn sg_two_squares_one_bounce_matches_quadrature() {
 #[test]
 fn sg_is_bit_identical_for_one_and_two_threads() {
     use interreflect::cut::CutOptions;
-    use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg};
+    use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
     let scene = Scene::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/ring.toml"
@@ -411,19 +405,11 @@ fn sg_is_bit_identical_for_one_and_two_threads() {
             mode,
             max_edge: 0.2,
         };
-        let cancel = std::sync::atomic::AtomicBool::new(false);
-        let done = |_: u64| {};
-        let prog = interreflect::render::cpu::Progress {
-            done: &done,
-            cancel: &cancel,
-        };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| render_sg(&scene, &accel, &o, &prog))
-            .expect("not cancelled")
-            .0
+        pool.install(|| render_sg_quiet(&scene, &accel, &o)).0
     };
     for mode in [CutMode::Pixel, CutMode::Vertex] {
         let (a, b) = (render(1, mode), render(2, mode));

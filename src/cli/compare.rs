@@ -114,18 +114,13 @@ fn integer_factor(test: &Image, reference: &Image) -> Option<u32> {
 /// Mean of each k×k block: the box-filtered image at 1/k the resolution (a box-filtered
 /// render's pixels average into the box-filtered pixels of the coarser image exactly).
 fn box_filter(img: &Image, k: u32) -> Image {
-    let (w, h) = (img.width / k, img.height / k);
-    let mut out = Image::new(w, h);
-    for y in 0..h {
-        for x in 0..w {
-            let mut s = glam::DVec3::ZERO;
-            for j in 0..k {
-                for i in 0..k {
-                    s += img.data[((y * k + j) * img.width + x * k + i) as usize].as_dvec3();
-                }
+    Image::from_fn(img.width / k, img.height / k, |x, y| {
+        let mut s = glam::DVec3::ZERO;
+        for j in 0..k {
+            for i in 0..k {
+                s += img.get(x * k + i, y * k + j).as_dvec3();
             }
-            out.data[(y * w + x) as usize] = (s / f64::from(k * k)).as_vec3();
         }
-    }
-    out
+        (s / f64::from(k * k)).as_vec3()
+    })
 }

@@ -1,6 +1,7 @@
 //! Progress bars (hidden with --quiet or when stderr is not a terminal) and Ctrl-C handling.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use interreflect::render::cpu::Progress;
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -32,4 +33,18 @@ pub fn interrupt_flag() -> &'static AtomicBool {
         let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
     });
     &INTERRUPTED
+}
+
+/// Runs `work` with a progress bar over `units` work units and the Ctrl-C flag; `None` when it
+/// was interrupted (whatever `work` returned).
+pub fn run<T>(units: u64, quiet: bool, work: impl FnOnce(&Progress) -> Option<T>) -> Option<T> {
+    let pb = bar(units, "rendering", quiet);
+    let cancel = interrupt_flag();
+    let done = |n: u64| pb.inc(n);
+    let result = work(&Progress {
+        done: &done,
+        cancel,
+    });
+    pb.finish_and_clear();
+    result.filter(|_| !cancel.load(Ordering::SeqCst))
 }

@@ -9,12 +9,11 @@ use interreflect::image::{Tonemap, write_exr, write_png};
 use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
-use interreflect::render::cpu::{Progress, RenderOptions, render};
+use interreflect::render::cpu::{RenderOptions, render};
 use interreflect::render::{Method, Visibility};
 use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -267,9 +266,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     if !(max_edge.is_finite() && max_edge >= 0.0) {
         bail!("--max-edge must be a length ≥ 0 (0 = never split), got {max_edge}");
     }
-    let cancel = progress::interrupt_flag();
     let t = Instant::now();
-    let (img, reference_log, sg_log, nonfinite) = if is_sg {
+    let rendered = if is_sg {
         let opts = SgOptions {
             width,
             height,
@@ -282,17 +280,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             mode: cut_mode,
             max_edge,
         };
-        let pb = progress::bar(sg_work_units(&opts), "rendering", args.quiet);
-        let done = |n: u64| pb.inc(n);
-        let prog = Progress {
-            done: &done,
-            cancel,
-        };
-        let result = pool.install(|| render_sg(&scene, &accel, &opts, &prog));
-        pb.finish_and_clear();
+        let result = progress::run(sg_work_units(&opts), args.quiet, |prog| {
+            pool.install(|| render_sg(&scene, &accel, &opts, prog))
+        });
         let Some((img, stats)) = result else {
-            eprintln!("interrupted: nothing was written");
-            return Ok(130);
+            return Ok(interrupted());
         };
         let s = &stats;
         log(format!(
@@ -339,17 +331,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             bsdf_samples: r.bsdf_samples,
             light_paths: r.light_paths,
         };
-        let pb = progress::bar(work_units(&opts), "rendering", args.quiet);
-        let done = |n: u64| pb.inc(n);
-        let prog = Progress {
-            done: &done,
-            cancel,
-        };
-        let result = pool.install(|| render(&scene, &accel, &opts, &prog));
-        pb.finish_and_clear();
+        let result = progress::run(work_units(&opts), args.quiet, |prog| {
+            pool.install(|| render(&scene, &accel, &opts, prog))
+        });
         let Some((img, stats)) = result else {
-            eprintln!("interrupted: nothing was written");
-            return Ok(130);
+            return Ok(interrupted());
         };
         let secs = t.elapsed().as_secs_f64().max(1e-9);
         (
@@ -369,11 +355,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             stats.nonfinite_samples,
         )
     };
+    let (img, reference_log, sg_log, nonfinite) = rendered;
     times.render = t.elapsed().as_secs_f64();
-    if cancel.load(Ordering::SeqCst) {
-        eprintln!("interrupted: nothing was written");
-        return Ok(130);
-    }
     if nonfinite > 0 {
         eprintln!("warning: {nonfinite} samples were not finite and were dropped");
     }
@@ -430,4 +413,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         times.load, times.bvh, times.render, times.write, times.total
     ));
     Ok(0)
+}
+
+/// Reports an interrupted render (nothing written) and returns its exit status.
+fn interrupted() -> i32 {
+    eprintln!("interrupted: nothing was written");
+    130
 }

@@ -74,15 +74,8 @@ pub struct LitTriangle {
     pub light_mask: u8,
 }
 
-impl LitTriangle {
-    /// The four points the light's visibility is sampled at: the centroid and the centroids of
-    /// the three corner sub-triangles.
-    pub fn visibility_points(&self) -> [Vec3; 4] {
-        visibility_points(self.vertices)
-    }
-}
-
-/// See [`LitTriangle::visibility_points`].
+/// The four points of triangle (a, b, c) the light's visibility is sampled at: the centroid and
+/// the centroids of the three corner sub-triangles.
 pub fn visibility_points([a, b, c]: [Vec3; 3]) -> [Vec3; 4] {
     [
         (a + b + c) / 3.0,
@@ -93,6 +86,11 @@ pub fn visibility_points([a, b, c]: [Vec3; 3]) -> [Vec3; 4] {
 }
 
 impl LitTriangle {
+    /// [`visibility_points`] of this triangle.
+    pub fn visibility_points(&self) -> [Vec3; 4] {
+        visibility_points(self.vertices)
+    }
+
     /// The SG transport of this triangle to receiver point `x` (no visibility): the lobes
     /// re-aimed at x, integrated over the triangle's solid angle. This is what `sg-brute`
     /// sums and what a leaf of the cut contributes.
@@ -120,10 +118,9 @@ impl LitTriangle {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NodeLobe {
     /// Σ A_i μ_i / λ_i (the lobes' energy × area, up to 2π), RGB: conserved when lobes merge.
+    /// Its luminance is the sum of the merge weights w_i = luminance(A_i μ_i) / λ_i.
     pub energy: Vec3,
-    /// Σ w_i with w_i = luminance(A_i μ_i) / λ_i (the lobe's energy): the merge weights.
-    pub weight: f32,
-    /// Σ w_i p_i (p_i the lobe axes): its length / weight is the mean resultant length R.
+    /// Σ w_i p_i (p_i the lobe axes): its length / Σ w_i is the mean resultant length R.
     pub axis_sum: Vec3,
     /// Σ w_i / λ_i: the weighted mean of 1/λ (the lobe's angular variance).
     pub inv_sharpness_sum: f32,
@@ -132,17 +129,16 @@ pub struct NodeLobe {
 /// The lit state of one tree node: sums over its triangles.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LitNode {
-    /// Σ A_i (d_i + Σ_k μ_ik) per channel: peak reflected radiance × area, for the bound.
-    pub peak_power: Vec3,
     /// Lit area Σ A_i (triangles with light).
     pub area: f32,
     /// Σ A_i n_i over lit triangles, n_i the lit side's unit normal.
     pub normal_sum: Vec3,
     /// Σ A_i d_i (diffuse radiance × area), RGB.
     pub diffuse: Vec3,
-    /// Σ w_i c_i with w_i = luminance of the triangle's peak power: the centroid of the light.
+    /// Σ w_i c_i with w_i = luminance of the triangle's peak power
+    /// ([`LitTriangle::peak_power`]): the centroid of the light.
     pub centroid_sum: Vec3,
-    /// Σ w_i.
+    /// Σ w_i; zero when nothing under the node is lit.
     pub weight: f32,
     pub lobes: [NodeLobe; MAX_LOBES],
     /// Tree-order position of the representative leaf (the brightest triangle's), the target of
@@ -165,7 +161,6 @@ pub struct LitNode {
 impl Default for LitNode {
     fn default() -> Self {
         LitNode {
-            peak_power: Vec3::ZERO,
             area: 0.0,
             normal_sum: Vec3::ZERO,
             diffuse: Vec3::ZERO,
@@ -195,7 +190,6 @@ impl Default for NodeLobe {
     fn default() -> Self {
         NodeLobe {
             energy: Vec3::ZERO,
-            weight: 0.0,
             axis_sum: Vec3::ZERO,
             inv_sharpness_sum: 0.0,
         }
@@ -213,11 +207,10 @@ impl LitNode {
         };
         let [a, b, c] = t.vertices;
         let area = 0.5 * (b - a).cross(c - a).length();
-        n.peak_power = t.peak_power();
         n.area = area;
         n.normal_sum = s.normal * area;
         n.diffuse = s.diffuse * area;
-        let w = luminance(n.peak_power).max(0.0);
+        let w = luminance(t.peak_power()).max(0.0);
         n.weight = w;
         n.rep_power = w;
         n.centroid_sum = s.origin * w;
@@ -232,7 +225,6 @@ impl LitNode {
             let wk = luminance(amp).max(0.0) / lam;
             *slot = NodeLobe {
                 energy: amp / lam,
-                weight: wk,
                 axis_sum: l.axis * wk,
                 inv_sharpness_sum: wk / lam,
             };
@@ -247,7 +239,6 @@ impl LitNode {
             let (x, y) = (&a.lobes[k], &b.lobes[k]);
             *l = NodeLobe {
                 energy: x.energy + y.energy,
-                weight: x.weight + y.weight,
                 axis_sum: x.axis_sum + y.axis_sum,
                 inv_sharpness_sum: x.inv_sharpness_sum + y.inv_sharpness_sum,
             };
@@ -258,7 +249,6 @@ impl LitNode {
             (a.rep, a.rep_power)
         };
         LitNode {
-            peak_power: a.peak_power + b.peak_power,
             area: a.area + b.area,
             normal_sum: a.normal_sum + b.normal_sum,
             diffuse: a.diffuse + b.diffuse,
@@ -301,12 +291,12 @@ pub struct ReflectorPiece {
     pub normals: [Vec3; 3],
 }
 
-/// Most pieces one scene triangle is split into (4⁵).
-pub const MAX_PIECES_PER_TRIANGLE: usize = 1024;
+/// Most times a scene triangle is split (into at most 4⁵ = 1024 pieces).
+pub const MAX_SPLIT_LEVELS: usize = 5;
 
 /// The scene's reflector triangles, each split at its edge midpoints into 4, recursively, until
-/// its longest edge is at most `max_edge` (0 = no splitting; at most
-/// [`MAX_PIECES_PER_TRIANGLE`] pieces per triangle). The SG transport lights a triangle at its
+/// its longest edge is at most `max_edge` (0 = no splitting; at most [`MAX_SPLIT_LEVELS`]
+/// levels). The SG transport lights a triangle at its
 /// centroid and reflects a constant radiance across it; a large floor triangle under a point
 /// light, seen in a glossy receiver, would show as a flat facet.
 pub fn reflector_pieces(scene: &Scene, max_edge: f32) -> Vec<ReflectorPiece> {
@@ -326,7 +316,7 @@ pub fn reflector_pieces(scene: &Scene, max_edge: f32) -> Vec<ReflectorPiece> {
             };
             let mut out = vec![root];
             if max_edge > 0.0 {
-                for _ in 0..5 {
+                for _ in 0..MAX_SPLIT_LEVELS {
                     let longest = |p: &ReflectorPiece| {
                         let [a, b, c] = p.vertices;
                         (b - a).length().max((c - b).length()).max((a - c).length())
@@ -395,8 +385,7 @@ pub fn light_triangles(
     light: &Light,
     visible: &(dyn Fn(Vec3, u32) -> f32 + Sync),
 ) -> Vec<LitTriangle> {
-    let (lo, hi) = scene.mesh.bounds();
-    let scale = (hi - lo).length().max(1e-3);
+    let scale = scene.mesh.diagonal().max(1e-3);
     order
         .par_iter()
         .map(|&i| {
@@ -484,7 +473,7 @@ impl<'a> LitScene<'a> {
     pub fn bound(&self, node: u32, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
         let n = &self.tree.nodes[node as usize];
         let lit = &self.nodes[node as usize];
-        if n.is_leaf() || lit.peak_power == Vec3::ZERO {
+        if n.is_leaf() || !(lit.weight > 0.0) {
             return Vec3::ZERO;
         }
         node_bound(n, lit, x, rx)
@@ -543,14 +532,15 @@ impl<'a> LitScene<'a> {
             None
         };
         for l in &lit.lobes {
-            if !(l.weight > 0.0) {
+            let weight = luminance(l.energy);
+            if !(weight > 0.0) {
                 continue;
             }
-            let mean_axis = l.axis_sum / l.weight;
+            let mean_axis = l.axis_sum / weight;
             let rlen = mean_axis.length().min(1.0);
             // Outgoing-direction variance: the lobes' own plus the spread of their axes
             // (vMF: 1 − R ≈ 1/κ for a concentrated distribution).
-            let own = l.inv_sharpness_sum / l.weight;
+            let own = l.inv_sharpness_sum / weight;
             let spread = 1.0 - rlen;
             let (axis, scale) = aim.unwrap_or((mean_axis.normalize_or_zero(), 1.0));
             if axis == Vec3::ZERO {

@@ -44,36 +44,20 @@ struct Config {
     light: Vec3,
 }
 
-fn config(seed: u64, n: usize, sheet: bool) -> Config {
-    let mut rng = Rng::keyed(seed, 1, 2);
+/// The tree and lit triangles of `tris` (corners and material index) under a point light of
+/// intensity 10 at `light`, fully visible.
+fn lit_config(tris: &[([Vec3; 3], usize)], light: Vec3) -> Config {
     let mats = materials();
-    let light = Vec3::new(0.5, 3.0, 0.5) + rvec(&mut rng);
+    let l = crate::scene::Light::Point {
+        position: light,
+        intensity: Vec3::splat(10.0),
+    };
     let mut inputs = Vec::new();
     let mut lit = Vec::new();
-    for i in 0..n {
-        let c = if sheet {
-            Vec3::new(
-                rng.f32() * 2.0 - 1.0,
-                0.05 * rng.f32(),
-                rng.f32() * 2.0 - 1.0,
-            )
-        } else {
-            rvec(&mut rng) * 0.6
-        };
-        let size = 0.05 + 0.2 * rng.f32();
-        let v = [
-            c + rvec(&mut rng) * size,
-            c + rvec(&mut rng) * size,
-            c + rvec(&mut rng) * size,
-        ];
-        let m = (rng.next_u32() % 4) as usize;
+    for (i, &(v, m)) in tris.iter().enumerate() {
         let refl = Reflector {
             vertices: v,
             brdf: mats[m],
-        };
-        let l = crate::scene::Light::Point {
-            position: light,
-            intensity: Vec3::splat(10.0),
         };
         inputs.push(TriInput {
             v,
@@ -95,16 +79,33 @@ fn config(seed: u64, n: usize, sheet: bool) -> Config {
     Config { tris, tree, light }
 }
 
+fn config(seed: u64, n: usize, sheet: bool) -> Config {
+    let mut rng = Rng::keyed(seed, 1, 2);
+    let light = Vec3::new(0.5, 3.0, 0.5) + rvec(&mut rng);
+    let mut tris = Vec::new();
+    for _ in 0..n {
+        let c = if sheet {
+            Vec3::new(
+                rng.f32() * 2.0 - 1.0,
+                0.05 * rng.f32(),
+                rng.f32() * 2.0 - 1.0,
+            )
+        } else {
+            rvec(&mut rng) * 0.6
+        };
+        let size = 0.05 + 0.2 * rng.f32();
+        let v = [
+            c + rvec(&mut rng) * size,
+            c + rvec(&mut rng) * size,
+            c + rvec(&mut rng) * size,
+        ];
+        tris.push((v, (rng.next_u32() % 4) as usize));
+    }
+    lit_config(&tris, light)
+}
+
 /// A flat 2 × 2 m grid of 2 k² triangles at y = 0 with a mix of materials, lit from above.
 fn grid(k: usize) -> Config {
-    let mats = materials();
-    let light = Vec3::new(0.7, 2.5, 0.3);
-    let l = crate::scene::Light::Point {
-        position: light,
-        intensity: Vec3::splat(10.0),
-    };
-    let mut inputs = Vec::new();
-    let mut lit = Vec::new();
     let p = |i: usize, j: usize| {
         Vec3::new(
             2.0 * i as f32 / k as f32 - 1.0,
@@ -112,38 +113,15 @@ fn grid(k: usize) -> Config {
             2.0 * j as f32 / k as f32 - 1.0,
         )
     };
+    let mut tris = Vec::new();
     for i in 0..k {
         for j in 0..k {
-            for v in [
-                [p(i, j), p(i, j + 1), p(i + 1, j)],
-                [p(i + 1, j), p(i, j + 1), p(i + 1, j + 1)],
-            ] {
-                let id = inputs.len() as u32;
-                let m = (i / 8 + j / 8) % 4;
-                let refl = Reflector {
-                    vertices: v,
-                    brdf: mats[m],
-                };
-                inputs.push(TriInput {
-                    v,
-                    normal: refl.normal(),
-                    albedo: Vec3::ONE,
-                    material: m as u32,
-                    tri: id,
-                });
-                lit.push(LitTriangle {
-                    tri: id,
-                    vertices: v,
-                    sg: reflected_sg_light(&refl, &l, 1.0, 1.0),
-                    light_visibility: 1.0,
-                    light_mask: 15,
-                });
-            }
+            let m = (i / 8 + j / 8) % 4;
+            tris.push(([p(i, j), p(i, j + 1), p(i + 1, j)], m));
+            tris.push(([p(i + 1, j), p(i, j + 1), p(i + 1, j + 1)], m));
         }
     }
-    let tree = build_from(&inputs);
-    let tris = tree.tri_order.iter().map(|&t| lit[t as usize]).collect();
-    Config { tris, tree, light }
+    lit_config(&tris, Vec3::new(0.7, 2.5, 0.3))
 }
 
 fn receiver(rng: &mut Rng) -> (Vec3, ReceiverLobes) {

@@ -10,7 +10,7 @@ pub mod schema;
 pub mod shapes;
 
 pub use camera::Camera;
-pub use light::Light;
+pub use light::{Incident, Light};
 
 use crate::brdf::{Brdf, Distribution};
 use glam::{Mat3, Mat4, Quat, Vec3};

@@ -9,7 +9,7 @@
 //! receiver vertex) → shading. Each stage is timed; see [`SgStats`].
 
 use super::reference::Progress;
-use super::surface::{SurfacePoint, ray_epsilon, reflected_light};
+use super::surface::{SurfacePoint, light_visible, ray_epsilon, reflected_light};
 use crate::accel::{Accel, Hit};
 use crate::cut::{
     CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, build_tree, light_anchor,
@@ -269,18 +269,14 @@ pub fn render_sg(
     Some((img, stats))
 }
 
-/// Whether `light` reaches the surface point `p` (offset along the light direction: `p` lies on
-/// its triangle).
-fn light_visible(accel: &Accel, light: &crate::scene::Light, p: Vec3, eps: f32) -> bool {
-    let Some(inc) = light.incident(p) else {
-        return false;
+/// Convenience: [`render_sg`] with no progress reporting or cancellation.
+pub fn render_sg_quiet(scene: &Scene, accel: &Accel, opts: &SgOptions) -> (Image, SgStats) {
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let p = Progress {
+        done: &super::reference::no_progress,
+        cancel: &cancel,
     };
-    let tmax = if inc.dist.is_finite() {
-        inc.dist * (1.0 - 1e-5) - eps
-    } else {
-        f32::INFINITY
-    };
-    accel.unoccluded(p + inc.wi * eps, inc.wi, 0.0, tmax)
+    render_sg(scene, accel, opts, &p).expect("not cancelled")
 }
 
 /// Cuts per light and vertex: `cuts[light][vertex]` (empty for vertices no sample needs).
@@ -411,7 +407,7 @@ impl Ctx<'_> {
         }
         let xo = sp.offset(self.eps);
         let mut rays = 0u64;
-        for (k, lit) in self.lits.iter().enumerate() {
+        for (k, (light, lit)) in self.scene.lights.iter().zip(self.lits).enumerate() {
             tally.shading_points.fetch_add(1, Ordering::Relaxed);
             if self.brute {
                 let mut c = CutCounters::default();
@@ -423,7 +419,6 @@ impl Ctx<'_> {
                     c.leaves += 1;
                     let v = t.shade(sp.p, &rx, &lit.receiver);
                     if v != Vec3::ZERO {
-                        let light = &self.scene.lights[k];
                         let (f, r) = self.triangle_visibility(xo, t, light, &rx);
                         rays += r;
                         l += v * f;
@@ -452,7 +447,6 @@ impl Ctx<'_> {
                 let n = &lit.tree.nodes[e.node as usize];
                 if n.is_leaf() {
                     let t = &lit.tris[n.first as usize];
-                    let light = &self.scene.lights[k];
                     let (f, r) = self.triangle_visibility(xo, t, light, &rx);
                     rays += r;
                     l += e.value * f;

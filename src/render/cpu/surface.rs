@@ -4,7 +4,7 @@
 use crate::accel::{Accel, Hit};
 use crate::brdf::Brdf;
 use crate::math::Frame;
-use crate::scene::{Light, Scene};
+use crate::scene::{Incident, Light, Scene};
 use glam::Vec3;
 
 /// A point on a surface, oriented towards the side it is seen from.
@@ -86,13 +86,27 @@ pub fn reflected_light(
     if f == Vec3::ZERO || inc.irradiance == Vec3::ZERO {
         return Vec3::ZERO;
     }
+    if !shadow_ray_clear(accel, sp.offset(eps), &inc, eps) {
+        return Vec3::ZERO;
+    }
+    f * wi_l.z * inc.irradiance
+}
+
+/// Whether the shadow ray from `origin` (already offset off its surface) towards the light that
+/// delivers `inc` reaches it: stopped `eps` (and 1e-5 relative) short of a positional light.
+pub fn shadow_ray_clear(accel: &Accel, origin: Vec3, inc: &Incident, eps: f32) -> bool {
     let tmax = if inc.dist.is_finite() {
         inc.dist * (1.0 - 1e-5) - eps
     } else {
         f32::INFINITY
     };
-    if !accel.unoccluded(sp.offset(eps), inc.wi, 0.0, tmax) {
-        return Vec3::ZERO;
-    }
-    f * wi_l.z * inc.irradiance
+    accel.unoccluded(origin, inc.wi, 0.0, tmax)
+}
+
+/// Whether `light` reaches the surface point `p`, offset by `eps` along the light direction (for
+/// points that lie on their triangle but have no oriented frame, e.g. points of a reflector).
+pub fn light_visible(accel: &Accel, light: &Light, p: Vec3, eps: f32) -> bool {
+    light
+        .incident(p)
+        .is_some_and(|inc| shadow_ray_clear(accel, p + inc.wi * eps, &inc, eps))
 }
