@@ -80,6 +80,13 @@ impl Brdf {
         validate::validate(self)
     }
 
+    /// Whether the glossy lobe is a distribution of half vectors (Blinn-Phong, Ward,
+    /// Cook-Torrance), whose lobe over wi is anisotropic for an oblique view; Phong's lobe is
+    /// isotropic about the mirror direction, and Lambert has none.
+    pub fn has_half_vector_lobe(&self) -> bool {
+        !matches!(self, Brdf::Phong { .. } | Brdf::Lambert { .. })
+    }
+
     /// f(wo, wi) in 1/sr, without the cosine; zero when either direction is below the horizon.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         if !(wo.z > 0.0 && wi.z > 0.0) {

@@ -129,7 +129,7 @@ wide range of BRDFs\" claim.\n",
     }
     outln!(
         md,
-        "\nThe variant in bold is what the defaults use (`ReceiverOptions::default()`, mirror-image aiming). Its exact cosine (`CosineMode::Moment`) equals the cosine at the lobe axis wherever the lobe sits well above the receiver's horizon; it differs for lobes near or across the horizon (receivers seen at grazing angles, wide lobes), where the axis cosine loses up to half the light (`docs/sg-renderer.md`) — here it lowers the mean and the 90th percentile at the same median.\n"
+        "\nThe variant in bold is what the defaults use (`ReceiverOptions::default()`, mirror-image aiming). Its exact cosine (`CosineMode::Moment`) equals the cosine at the lobe axis wherever the lobe sits well above the receiver's horizon; it differs for lobes near or across the horizon (receivers seen at grazing angles, wide lobes), where the axis cosine loses up to half the light (`docs/sg-renderer.md`) — here it lowers the mean and the 90th percentile at the same median. The anisotropic warp is described under *Reading the table*.\n"
     );
     outln!(
         md,
@@ -196,15 +196,21 @@ const NOTES: &str = "\
 - The mirror-image aim is what makes sharp reflectors work: with lobes built at the centroid, a \
 receiver whose specular point on the triangle is not the centroid sees the lobe off its peak, and \
 for exponents above ~100 the error runs to several hundred per cent.
-- The errors that remain have known causes: (1) the warp of the NDF lobe into the light domain is \
-isotropic, while the true reflected lobe is stretched by 1/cos θ in the plane of incidence \
-(`results/brdf-fits.md`: 17 % at 45°, 62 % at 75° for any sharp lobe) — the *grazing light* \
-configuration (light 15° above the triangle) is where this dominates; (2) the light's distance \
-and the cosine at the reflector are taken at the centroid, which matters for large triangles \
-close to the light; (3) GGX has long tails that a few Gaussians follow only near the peak, \
-which shows when the view is off the double-mirror direction. The receiver's cosine is no longer \
-a source: the default integrates it exactly (the smooth-factor variants, at the lobe axis or at \
-the triangle's centroid, agree with it to 0.1 % in median here, while the 1.17/2.133 SG fit of \
-the cosine is measurably worse, as the variants table shows).
+- The anisotropic warp (the default) is the second step: the isotropic warp of a half-vector \
+lobe (Blinn-Phong, Ward, Cook-Torrance) has the right energy but the wrong shape, since the true \
+reflected lobe is wider by 1/cos θ in the plane of incidence than across it \
+(`results/brdf-fits.md`: 17 % at 45°, 62 % at 75° for any sharp lobe). Giving the lobes of both \
+the reflector and the receiver their anisotropy, and integrating it exactly through a linear \
+change of directions (`docs/sg-renderer.md`), lowers the median from 1.8 % to 0.7 % and the \
+90th percentile from 12.9 % to 7.2 %; the *grazing light* configuration (light 15° above the \
+triangle), where the isotropic warp was worst, goes from 10.7 % to 2.8 % in median.
+- The errors that remain have known causes: (1) the light's distance and the cosine at the \
+reflector are taken at the centroid, which matters for large triangles close to the light; \
+(2) GGX has long tails that a few Gaussians follow only near the peak, which shows when the \
+view is off the double-mirror direction; (3) at views within ~10° of grazing, the BRDF's smooth \
+factor taken at the lobe's peak is far from its value across a wide lobe. The receiver's cosine \
+is not a source: the default integrates it exactly (the smooth-factor variants, at the lobe axis \
+or at the triangle's centroid, agree with it to 0.1 % in median here, while the 1.17/2.133 SG \
+fit of the cosine is measurably worse, as the variants table shows).
 - Small triangles (the *small, far* configuration, like the leaves and deep nodes of the tree in \
 a real scene) are where the method is most accurate across the whole range of materials.";

@@ -219,6 +219,17 @@ impl LitNode {
             n.image_min = image;
             n.image_max = image;
         }
+        // The smallest sharpness a lobe of this triangle has in any direction at any receiver:
+        // an anisotropic (half-vector) lobe is λ_h/4 · (1 + d_x/d_l)² ≥ λ cos θ_l wide in the
+        // plane of incidence (`transport::aim_at_receiver`), λ the isotropic warp's sharpness.
+        let widest = if s.half_vector {
+            (s.light - s.origin)
+                .normalize_or_zero()
+                .dot(s.normal)
+                .clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
         for (slot, l) in n.lobes.iter_mut().zip(s.lobes()) {
             let amp = l.amplitude * area;
             let lam = l.sharpness.max(1e-6);
@@ -228,7 +239,7 @@ impl LitNode {
                 axis_sum: l.axis * wk,
                 inv_sharpness_sum: wk / lam,
             };
-            n.peak_by_sharpness[sharpness_bin(l.sharpness.max(0.0))] += amp;
+            n.peak_by_sharpness[sharpness_bin(l.sharpness.max(0.0) * widest)] += amp;
         }
         n
     }
@@ -603,9 +614,11 @@ fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
     let cone = (dist > radius).then(|| (to_c / dist, (radius / dist).asin()));
     match cone {
         Some((dir, half)) => {
+            // An anisotropic receiver lobe is wider by its stretch in one direction.
+            let widest = 1.0 / rx.stretch();
             for h in rx.lobes() {
                 let gap = (angle(h.axis, dir) - half).max(0.0);
-                hmax += h.amplitude * (h.sharpness * (gap.cos() - 1.0)).min(0.0).exp();
+                hmax += h.amplitude * (h.sharpness * widest * (gap.cos() - 1.0)).min(0.0).exp();
             }
         }
         None => {

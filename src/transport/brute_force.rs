@@ -43,7 +43,8 @@ pub struct Config {
     pub brdf_x: Brdf,
 }
 
-/// The integrand at a reflector point y (per unit area).
+/// The integrand at a reflector point y (per unit area): `n_y` is the geometric normal (the
+/// projected area), `frame_y` the shading frame (the BRDF and the light's cosine).
 fn integrand(c: &Config, n_y: DVec3, frame_y: &Frame, frame_x: &Frame, y: DVec3) -> DVec3 {
     let x = c.x.as_dvec3();
     let to_x = x - y;
@@ -56,7 +57,7 @@ fn integrand(c: &Config, n_y: DVec3, frame_y: &Frame, frame_x: &Frame, y: DVec3)
     let w_yx = to_x / dx2.sqrt();
     let w_yl = to_l / dl2.sqrt();
     let cos_y = n_y.dot(w_yx);
-    let cos_l = n_y.dot(w_yl);
+    let cos_l = frame_y.n.as_dvec3().dot(w_yl);
     let w_xy = -w_yx;
     let cos_x = c.n_x.as_dvec3().dot(w_xy);
     if !(cos_y > 0.0 && cos_l > 0.0 && cos_x > 0.0) {
@@ -80,6 +81,18 @@ fn integrand(c: &Config, n_y: DVec3, frame_y: &Frame, frame_x: &Frame, y: DVec3)
 /// triangle, comparing each triangle's 7-point estimate with its children's, up to `max_depth`
 /// levels). Returns zero when the receiver is on the reflector's unlit side.
 pub fn one_bounce_exact(c: &Config, rel_tol: f64, max_depth: u32) -> DVec3 {
+    one_bounce_exact_shaded(c, None, rel_tol, max_depth)
+}
+
+/// [`one_bounce_exact`] for a reflector with vertex (shading) normals: the BRDF and the light's
+/// cosine use the normal interpolated at each point, as the reference renderer does; the
+/// projected area uses the geometric normal.
+pub fn one_bounce_exact_shaded(
+    c: &Config,
+    normals: Option<[Vec3; 3]>,
+    rel_tol: f64,
+    max_depth: u32,
+) -> DVec3 {
     let [a, b, cc] = c.tri.map(|v| v.as_dvec3());
     let mut n_y = (b - a).cross(cc - a).normalize_or_zero();
     if n_y == DVec3::ZERO {
@@ -91,7 +104,23 @@ pub fn one_bounce_exact(c: &Config, rel_tol: f64, max_depth: u32) -> DVec3 {
     }
     let frame_y = Frame::from_normal(n_y.as_vec3());
     let frame_x = Frame::from_normal(c.n_x);
-    let f = |p: DVec3| integrand(c, n_y, &frame_y, &frame_x, p);
+    let area2 = (b - a).cross(cc - a).length_squared();
+    let f = |p: DVec3| match normals {
+        None => integrand(c, n_y, &frame_y, &frame_x, p),
+        Some(ns) => {
+            // Barycentric coordinates of p, the interpolated normal on the lit side.
+            let (v0, v1, v2) = (b - a, cc - a, p - a);
+            let cr = v0.cross(v1);
+            let u = v2.cross(v1).dot(cr) / area2;
+            let v = v0.cross(v2).dot(cr) / area2;
+            let m = ns[0].as_dvec3() * (1.0 - u - v) + ns[1].as_dvec3() * u + ns[2].as_dvec3() * v;
+            let m = if m.dot(n_y) < 0.0 { -m } else { m };
+            match m.try_normalize() {
+                Some(m) => integrand(c, n_y, &Frame::from_normal(m.as_vec3()), &frame_x, p),
+                None => DVec3::ZERO,
+            }
+        }
+    };
     let rule = |t: &[DVec3; 3]| -> DVec3 {
         let area = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
         RULE.iter().fold(DVec3::ZERO, |s, (bary, w)| {

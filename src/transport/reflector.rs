@@ -1,5 +1,6 @@
 //! The reflector side: radiance reflected by one triangle as SG lobes in the outgoing direction.
 
+use super::receiver::MAX_STRETCH;
 use crate::brdf::Brdf;
 use crate::brdf::sg_fit::{MAX_LOBES, warped_lobes};
 use crate::math::Frame;
@@ -40,6 +41,14 @@ pub struct ReflectedSg {
     pub origin: Vec3,
     /// Light position, kept for the mirror-image refinement.
     pub light: Vec3,
+    /// Whether the lobes are warped half-vector lobes (Blinn-Phong, Ward, Cook-Torrance), whose
+    /// true reflected shape is anisotropic; Phong's lobes are isotropic about the mirror
+    /// direction.
+    pub half_vector: bool,
+    /// Anisotropy of the lobes (≥ 1), set by [`aim_at_receiver`]: each lobe's sharpness is
+    /// the geometric mean λ of its sharpness λ/k in the plane of incidence and λ·k across it.
+    /// 1 is isotropic.
+    pub stretch: f32,
 }
 
 impl ReflectedSg {
@@ -81,9 +90,14 @@ pub fn reflected_sg(
 
 /// As [`reflected_sg`], with the triangle's vertex (shading) normals when it has them: the
 /// lobes are built about the mean shading normal, and widened by the spread of the mirror
-/// directions across the triangle (their variance is about 4 × the normals' 1 − R, R the
-/// length of the mean of the vertex normals), so that a faceted smooth surface reflects like the
-/// smooth surface the reference renders.
+/// directions across the triangle, so that a faceted smooth surface reflects like the smooth
+/// surface the reference renders. With vertex normals m + d_i (Σ d_i = 0, R = |m| the length of
+/// their mean, mean |d_i|² ≈ 2(1 − R)), the normal interpolated at a uniform point of the
+/// triangle deviates by E|Σ b_i d_i|² = (1/12) Σ |d_i|² = (1 − R)/2 (barycentric
+/// b uniform: Var b_i = 1/18, Cov = −1/36); mirror directions deviate twice as much, 2(1 − R),
+/// which is 2/λ for an SG: the widening adds 1/λ = 1 − R. (The vertices' own spread, 4(1 − R),
+/// was used before and lost up to 40 % of glossy-to-glossy light on the bunny:
+/// `docs/sg-renderer.md`.)
 pub fn reflected_sg_shaded(
     refl: &Reflector,
     normals: Option<[Vec3; 3]>,
@@ -104,7 +118,7 @@ pub fn reflected_sg_shaded(
         Some(ns) => {
             let m = (ns[0] + ns[1] + ns[2]) / 3.0;
             match m.try_normalize() {
-                Some(u) if u.dot(ng) > 0.0 => (u, 4.0 * (1.0 - m.length().min(1.0))),
+                Some(u) if u.dot(ng) > 0.0 => (u, 1.0 - m.length().min(1.0)),
                 _ => (ng, 0.0),
             }
         }
@@ -138,6 +152,8 @@ pub fn reflected_sg_shaded(
         normal: n,
         origin: y,
         light,
+        half_vector: refl.brdf.has_half_vector_lobe(),
+        stretch: 1.0,
     })
 }
 
@@ -185,6 +201,13 @@ pub fn reflected_sg_light_shaded(
 /// lobes are re-aimed along l' → x and sharpened by (1 + d_x/d_l)², with d_x and d_l the
 /// distances from the specular point (where l'x crosses the plane) to x and to the light: an
 /// angular deviation δ at the reflector appears as δ · d_l/(d_l + d_x) seen from x.
+///
+/// Half-vector lobes are also given their anisotropy at the specular point: a lobe of
+/// sharpness λ_h about the half vector reflects into sharpness λ_h/4 in the plane of incidence
+/// and λ_h/(4 cos² θ) across it (θ the incidence angle), where the isotropic warp has the
+/// geometric mean λ_h/(4 cos θ) (`results/brdf-fits.md`). The lobes keep the geometric mean,
+/// now at the specular point's θ rather than the centroid's, and `stretch` = 1/cos θ
+/// (at most [`MAX_STRETCH`]) records the ratio for the receiver's integral.
 /// Returns `s` unchanged when x is not on the lit side.
 pub fn aim_at_receiver(s: &ReflectedSg, x: Vec3) -> ReflectedSg {
     let n = s.normal;
@@ -201,8 +224,17 @@ pub fn aim_at_receiver(s: &ReflectedSg, x: Vec3) -> ReflectedSg {
     let d = (x - image).length();
     let d_l = d * h_l / (h_l + h_x);
     let d_x = d - d_l;
-    let scale = (1.0 + d_x / d_l).powi(2);
+    let mut scale = (1.0 + d_x / d_l).powi(2);
     let mut out = *s;
+    if s.half_vector {
+        // cos θ at the centroid (what the warp used) and at the specular point.
+        let cos_c = (s.light - s.origin).normalize_or_zero().dot(n);
+        let cos_s = axis.dot(n).max(1.0 / MAX_STRETCH);
+        if cos_c > 0.0 {
+            scale *= cos_c / cos_s;
+        }
+        out.stretch = 1.0 / cos_s;
+    }
     for l in out.lobes.iter_mut().take(out.len) {
         l.axis = axis;
         l.sharpness *= scale;

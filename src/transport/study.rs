@@ -170,45 +170,53 @@ pub struct Row {
 
 /// The variants compared: (aim, receiver options, label).
 pub fn variants() -> Vec<(Aim, ReceiverOptions, &'static str)> {
-    let o = |cosine| ReceiverOptions {
+    // Centroid-aimed lobes are isotropic (the anisotropy is set by the aim), so `anisotropic`
+    // only matters for the mirror-image rows.
+    let o = |cosine, anisotropic| ReceiverOptions {
         cosine,
         clip_horizon: true,
+        anisotropic,
     };
     vec![
         (
             Aim::Centroid,
-            o(CosineMode::TriangleCentroid),
+            o(CosineMode::TriangleCentroid, true),
             "centroid aim, cos at triangle centroid",
         ),
         (
             Aim::Centroid,
-            o(CosineMode::LobeAxis),
+            o(CosineMode::LobeAxis, true),
             "centroid aim, cos at lobe axis",
         ),
         (
             Aim::Centroid,
-            o(CosineMode::SgProduct),
+            o(CosineMode::SgProduct, true),
             "centroid aim, cos as SG",
         ),
         (
             Aim::Centroid,
-            o(CosineMode::Moment),
+            o(CosineMode::Moment, true),
             "centroid aim, exact cos (moment)",
         ),
         (
             Aim::MirrorImage,
-            o(CosineMode::TriangleCentroid),
+            o(CosineMode::TriangleCentroid, false),
             "mirror-image aim, cos at triangle centroid",
         ),
         (
             Aim::MirrorImage,
-            o(CosineMode::LobeAxis),
+            o(CosineMode::LobeAxis, false),
             "mirror-image aim, cos at lobe axis",
         ),
         (
             Aim::MirrorImage,
-            o(CosineMode::Moment),
+            o(CosineMode::Moment, false),
             "mirror-image aim, exact cos (moment)",
+        ),
+        (
+            Aim::MirrorImage,
+            ReceiverOptions::default(),
+            "mirror-image aim, exact cos, anisotropic warp",
         ),
     ]
 }
