@@ -223,10 +223,7 @@ impl LitNode {
         // an anisotropic (half-vector) lobe is λ_h/4 · (1 + d_x/d_l)² ≥ λ cos θ_l wide in the
         // plane of incidence (`transport::aim_at_receiver`), λ the isotropic warp's sharpness.
         let widest = if s.half_vector {
-            (s.light - s.origin)
-                .normalize_or_zero()
-                .dot(s.normal)
-                .clamp(0.0, 1.0)
+            s.light_cosine().clamp(0.0, 1.0)
         } else {
             1.0
         };

@@ -181,10 +181,22 @@ pub fn reference_triangle(p: DVec3, lam: f64, a: DVec3, b: DVec3, c: DVec3, rel_
     o * sum + if inside { lobe } else { 0.0 }
 }
 
-/// Brute-force 2-D reference: ω = normalize(a + u (b − a) + v (c − a)) over the unit simplex,
+/// Brute-force 2-D reference for an SG: [`brute_force_triangle_fn`] of exp(λ (ω·p − 1)).
+pub fn brute_force_triangle(p: DVec3, lam: f64, a: DVec3, b: DVec3, c: DVec3, n: usize) -> f64 {
+    brute_force_triangle_fn(|w| (lam * (w.dot(p) - 1.0)).exp(), a, b, c, n)
+}
+
+/// Brute-force 2-D reference for ∫ f(ω) dω over the spherical triangle (a, b, c):
+/// ω = normalize(a + u (b − a) + v (c − a)) over the unit simplex,
 /// dω = |det(a,b,c)| / |q|³ du dv, with an n×n grid of panels (Duffy-collapsed squares) each
 /// with an 8×8 Gauss-Legendre rule.
-pub fn brute_force_triangle(p: DVec3, lam: f64, a: DVec3, b: DVec3, c: DVec3, n: usize) -> f64 {
+pub fn brute_force_triangle_fn(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+    n: usize,
+) -> f64 {
     const X8: [f64; 8] = [
         -0.960_289_856_497_536_2,
         -0.796_666_477_413_626_7,
@@ -218,8 +230,7 @@ pub fn brute_force_triangle(p: DVec3, lam: f64, a: DVec3, b: DVec3, c: DVec3, n:
                     let q = a + (b - a) * (s * (1.0 - t)) + (c - a) * (s * t);
                     let l = q.length();
                     let w = q / l;
-                    let f = (lam * (w.dot(p) - 1.0)).exp();
-                    sum += ws * wt * 0.25 * h * h * s * det / (l * l * l) * f;
+                    sum += ws * wt * 0.25 * h * h * s * det / (l * l * l) * f(w);
                 }
             }
         }

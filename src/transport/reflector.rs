@@ -57,6 +57,14 @@ impl ReflectedSg {
         &self.lobes[..self.len]
     }
 
+    /// cos θ_l at the origin: the light's incidence the lobes were warped for (≤ 0 for a light
+    /// on the unlit side).
+    pub fn light_cosine(&self) -> f32 {
+        (self.light - self.origin)
+            .normalize_or_zero()
+            .dot(self.normal)
+    }
+
     /// L(r) for a unit outgoing direction (0 on the unlit side).
     pub fn eval(&self, r: Vec3) -> Vec3 {
         if !(r.dot(self.normal) > 0.0) {
@@ -228,7 +236,7 @@ pub fn aim_at_receiver(s: &ReflectedSg, x: Vec3) -> ReflectedSg {
     let mut out = *s;
     if s.half_vector {
         // cos θ at the centroid (what the warp used) and at the specular point.
-        let cos_c = (s.light - s.origin).normalize_or_zero().dot(n);
+        let cos_c = s.light_cosine();
         let cos_s = axis.dot(n).max(1.0 / MAX_STRETCH);
         if cos_c > 0.0 {
             scale *= cos_c / cos_s;

@@ -12,12 +12,12 @@ use super::reference::Progress;
 use super::surface::{SurfacePoint, light_visible, ray_epsilon, reflected_light};
 use crate::accel::{Accel, Hit};
 use crate::cut::{
-    CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, build_tree, light_anchor,
-    light_triangles, reflector_pieces,
+    CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, ReflectorPiece, build_tree,
+    light_anchor, light_triangles, reflector_pieces,
 };
 use crate::image::Image;
-use crate::precompute::tree;
-use crate::scene::Scene;
+use crate::precompute::tree::{self, ReflectorTree};
+use crate::scene::{Light, Scene};
 use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
@@ -171,17 +171,7 @@ pub fn render_sg(
         scene
             .lights
             .iter()
-            .map(|light| {
-                let visible = |c: Vec3, _t: u32| -> f32 {
-                    if light_visible(accel, light, c, eps) {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                };
-                let tris = light_triangles(scene, &pieces, &tree.tri_order, light, &visible);
-                LitScene::new(&tree, tris, light_anchor(scene, light), rx_opts)
-            })
+            .map(|light| light_scene(scene, accel, &pieces, &tree, light, eps, rx_opts))
             .collect()
     } else {
         Vec::new()
@@ -267,6 +257,27 @@ pub fn render_sg(
     stats.visibility_rays = tally.rays.into_inner();
     stats.nonfinite_samples = tally.bad.into_inner();
     Some((img, stats))
+}
+
+/// The reflector pieces lit by `light` (exact shadow rays) and summed up `tree`.
+fn light_scene<'t>(
+    scene: &Scene,
+    accel: &Accel,
+    pieces: &[ReflectorPiece],
+    tree: &'t ReflectorTree,
+    light: &Light,
+    eps: f32,
+    rx_opts: ReceiverOptions,
+) -> LitScene<'t> {
+    let visible = |c: Vec3, _t: u32| -> f32 {
+        if light_visible(accel, light, c, eps) {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    let tris = light_triangles(scene, pieces, &tree.tri_order, light, &visible);
+    LitScene::new(tree, tris, light_anchor(scene, light), rx_opts)
 }
 
 /// Convenience: [`render_sg`] with no progress reporting or cancellation.
@@ -585,7 +596,6 @@ fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 #[cfg(test)]
 mod probe {
     use super::*;
-    use crate::scene::Light;
     use crate::transport::brute_force::{Config, one_bounce_exact_shaded};
 
     /// Diagnostic for the transport at one pixel: at the centre of pixel (PROBE_X, PROBE_Y) of
@@ -628,12 +638,13 @@ mod probe {
         else {
             panic!("the probe handles point lights");
         };
-        let visible = |c: Vec3, _t: u32| f32::from(u8::from(light_visible(&accel, light, c, eps)));
-        let tris = light_triangles(&scene, &pieces, &tree.tri_order, light, &visible);
-        let lits = [LitScene::new(
+        let lits = [light_scene(
+            &scene,
+            &accel,
+            &pieces,
             &tree,
-            tris,
-            light_anchor(&scene, light),
+            light,
+            eps,
             ReceiverOptions::default(),
         )];
         let camera = scene.camera.with_resolution(w, h);
