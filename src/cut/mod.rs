@@ -21,7 +21,9 @@ use crate::brdf::sg_fit::MAX_LOBES;
 use crate::math::sg::{Sg, lobe_integral};
 use crate::precompute::tree::{Node, ReflectorTree, TriInput};
 use crate::scene::{Light, Scene};
-use crate::transport::receiver::{ReceiverLobes, ReceiverOptions, one_bounce_with};
+use crate::transport::receiver::{
+    Anisotropic, MAX_STRETCH, ReceiverLobes, ReceiverOptions, one_bounce_with,
+};
 use crate::transport::reflector::{
     ReflectedSg, Reflector, aim_at_receiver, reflected_sg_light_shaded,
 };
@@ -156,6 +158,9 @@ pub struct LitNode {
     /// x → its image.
     pub image_min: Vec3,
     pub image_max: Vec3,
+    /// Every lit triangle with lobes has half-vector lobes (anisotropic when reflected
+    /// obliquely; see [`crate::brdf::Brdf::has_half_vector_lobe`]).
+    pub half_vector: bool,
 }
 
 impl Default for LitNode {
@@ -172,6 +177,7 @@ impl Default for LitNode {
             image_min: Vec3::splat(f32::INFINITY),
             image_max: Vec3::splat(f32::NEG_INFINITY),
             peak_by_sharpness: [Vec3::ZERO; SHARPNESS_BINS.len()],
+            half_vector: true,
         }
     }
 }
@@ -214,6 +220,7 @@ impl LitNode {
         n.weight = w;
         n.rep_power = w;
         n.centroid_sum = s.origin * w;
+        n.half_vector = s.half_vector || s.len == 0;
         if s.len > 0 {
             let image = s.light - 2.0 * (s.light - s.origin).dot(s.normal) * s.normal;
             n.image_min = image;
@@ -270,6 +277,7 @@ impl LitNode {
             peak_by_sharpness: std::array::from_fn(|k| {
                 a.peak_by_sharpness[k] + b.peak_by_sharpness[k]
             }),
+            half_vector: a.half_vector && b.half_vector,
         }
     }
 }
@@ -487,6 +495,15 @@ impl<'a> LitScene<'a> {
         node_bound(n, lit, x, rx)
     }
 
+    /// The factors of [`Self::bound`] (see `node_bound_parts`), for diagnostics.
+    #[cfg(test)]
+    pub(crate) fn bound_parts(&self, node: u32, x: Vec3, rx: &ReceiverLobes) -> [f32; 6] {
+        let mut parts = [0.0; 6];
+        let n = &self.tree.nodes[node as usize];
+        node_bound_parts(n, &self.nodes[node as usize], x, rx, &mut parts);
+        parts
+    }
+
     /// The node's approximate contribution at `x` (no visibility), clamped to `bound`. A leaf
     /// gives its exact SG transport.
     pub fn approx(&self, node: u32, x: Vec3, rx: &ReceiverLobes, bound: Vec3) -> Vec3 {
@@ -519,22 +536,37 @@ impl<'a> LitScene<'a> {
         let cap_sharp = 2.0 * std::f32::consts::PI / omega;
         let cap = Sg::new(-r, cap_sharp, Vec3::splat(omega / lobe_integral(cap_sharp)));
         let inv_area = 1.0 / lit.area;
-        let mut incoming = [cap; MAX_LOBES + 1];
+        let aniso = self.receiver.anisotropic;
+        let cap_a = Anisotropic::isotropic(&cap);
+        let mut incoming = [cap_a; MAX_LOBES + 1];
         let mut count = 0;
         if lit.diffuse != Vec3::ZERO {
-            incoming[0].amplitude *= lit.diffuse * inv_area;
+            let mut d = cap;
+            d.amplitude *= lit.diffuse * inv_area;
+            incoming[0] = Anisotropic::isotropic(&d);
             count = 1;
         }
         // Mirror-image aiming about the node's mean plane (exact for a flat node).
         let nbar = lit.normal_sum.normalize_or_zero();
         let h_l = (self.light_pos - c).dot(nbar);
         let h_x = v.dot(nbar);
+        // As `transport::aim_at_receiver` does for one triangle: half-vector lobes take the
+        // incidence angle at the specular point (sharpness × cos θ_c / cos θ_s, stretch
+        // 1/cos θ_s across the plane of incidence).
         let aim = if h_l > 0.0 && h_x > 0.0 {
             let image = self.light_pos - 2.0 * h_l * nbar;
             (x - image).try_normalize().map(|axis| {
                 let d = (x - image).length();
                 let d_l = d * h_l / (h_l + h_x);
-                (axis, (1.0 + (d - d_l) / d_l).powi(2))
+                let mut scale = (1.0 + (d - d_l) / d_l).powi(2);
+                let mut stretch = 1.0;
+                if lit.half_vector && aniso {
+                    let cos_c = h_l / (self.light_pos - c).length();
+                    let cos_s = axis.dot(nbar).max(1.0 / MAX_STRETCH);
+                    scale *= cos_c / cos_s;
+                    stretch = 1.0 / cos_s;
+                }
+                (axis, scale, stretch)
             })
         } else {
             None
@@ -550,22 +582,27 @@ impl<'a> LitScene<'a> {
             // (vMF: 1 − R ≈ 1/κ for a concentrated distribution).
             let own = l.inv_sharpness_sum / weight;
             let spread = 1.0 - rlen;
-            let (axis, scale) = aim.unwrap_or((mean_axis.normalize_or_zero(), 1.0));
+            let (axis, scale, stretch) = aim.unwrap_or((mean_axis.normalize_or_zero(), 1.0, 1.0));
             if axis == Vec3::ZERO {
                 continue;
             }
             // Peak radiance of the merged lobe: its energy over its width (μ/λ is conserved).
             let var = (own + spread).max(1e-12);
             let lobe = Sg::new(-axis, scale / var, l.energy * (inv_area / var));
-            incoming[count] = lobe.product(&cap);
+            let lobe = match (-axis).cross(nbar).try_normalize() {
+                Some(t) if stretch > 1.0 => Anisotropic::new(&lobe, t, stretch),
+                _ => Anisotropic::isotropic(&lobe),
+            };
+            incoming[count] = lobe.product(&cap_a);
             count += 1;
         }
         let n_x = rx.normal;
         let mut sum = Vec3::ZERO;
         for s in &incoming[..count] {
-            sum += rx.diffuse * s.integral() * clamped_cosine_mean(n_x.dot(s.axis), s.sharpness);
-            for h in rx.lobes() {
-                let p = s.product(h);
+            let s0 = s.lobe();
+            sum += rx.diffuse * s0.integral() * clamped_cosine_mean(n_x.dot(s0.axis), s0.sharpness);
+            for h in rx.anisotropic_lobes(aniso) {
+                let p = *s.product(&h).lobe();
                 sum += p.integral() * clamped_cosine_mean(n_x.dot(p.axis), p.sharpness);
             }
         }
@@ -581,6 +618,18 @@ impl<'a> LitScene<'a> {
 /// re-aiming only sharpens), so over the node they are at most exp(λ_min (cos γ − 1)) with γ the
 /// smallest angle at x between the node's bounding sphere and the images' bounding sphere.
 fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
+    node_bound_parts(n, lit, x, rx, &mut [0.0; 6])
+}
+
+/// [`node_bound`], with its factors written to `parts`: [luminance of the radiance bound,
+/// of hmax, cos_max / d², gap (radians, −1 when none), image radius angle, node half-angle].
+fn node_bound_parts(
+    n: &Node,
+    lit: &LitNode,
+    x: Vec3,
+    rx: &ReceiverLobes,
+    parts: &mut [f32; 6],
+) -> Vec3 {
     let (lo, hi) = (n.bbox_min, n.bbox_max);
     // Entirely below the receiver's horizon: nothing arrives (the transport clips to it).
     let nx = rx.normal;
@@ -630,6 +679,8 @@ fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
             let ir = 0.5 * (lit.image_max - lit.image_min).length();
             let to_i = ic - x;
             let di = to_i.length();
+            parts[4] = (ir / di).min(1.0).asin();
+            parts[5] = half;
             (di > ir).then(|| (angle(dir, to_i / di) - half - (ir / di).asin()).max(0.0))
         }
         _ => None,
@@ -652,6 +703,14 @@ fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
         }
         _ => 1.0,
     };
+    *parts = [
+        luminance(radiance),
+        luminance(hmax),
+        cos_max / d2,
+        gap.unwrap_or(-1.0),
+        parts[4],
+        parts[5],
+    ];
     // 1e-3: headroom for the rounding of the f32 sums and of the quadrature (≤ 5e-7 relative).
     radiance * hmax * (1.001 * cos_max / d2)
 }

@@ -137,6 +137,15 @@ impl ReceiverLobes {
         self.stretch
     }
 
+    /// The lobes with their anisotropy when `anisotropic` (as [`one_bounce_with`] integrates
+    /// them), otherwise isotropic.
+    pub fn anisotropic_lobes(&self, anisotropic: bool) -> impl Iterator<Item = Anisotropic> + '_ {
+        let k = if anisotropic { self.stretch } else { 1.0 };
+        self.lobes()
+            .iter()
+            .map(move |h| Anisotropic::new(h, self.across, k))
+    }
+
     /// Whether the receiver reflects nothing towards the view (view below the horizon or a
     /// black BRDF).
     pub fn is_black(&self) -> bool {
@@ -231,14 +240,15 @@ pub const ANISOTROPY_FADE: f32 = 1.0;
 /// and is what [`Sg`] lobes carry. Here `iso` holds the axis, the amplitude and that geometric
 /// mean s, and the precision is s/k along u = t × axis and s·k along the unit `t`.
 #[derive(Clone, Copy, Debug)]
-struct Anisotropic {
+pub struct Anisotropic {
     iso: Sg,
     t: Vec3,
     k: f32,
 }
 
 impl Anisotropic {
-    fn isotropic(lobe: &Sg) -> Anisotropic {
+    /// `lobe` without anisotropy.
+    pub fn isotropic(lobe: &Sg) -> Anisotropic {
         let t = Frame::from_normal(lobe.axis).to_world(Vec3::X);
         Anisotropic {
             iso: *lobe,
@@ -248,7 +258,7 @@ impl Anisotropic {
     }
 
     /// `lobe` stretched by `k` across `t` (unit, ⊥ the axis), faded out for wide lobes.
-    fn new(lobe: &Sg, t: Vec3, k: f32) -> Anisotropic {
+    pub fn new(lobe: &Sg, t: Vec3, k: f32) -> Anisotropic {
         let s = lobe.sharpness.max(0.0);
         let k = k.clamp(1.0, MAX_STRETCH);
         let fade = (s / k / ANISOTROPY_FADE).min(1.0);
@@ -257,6 +267,12 @@ impl Anisotropic {
             t,
             k: 1.0 + (k - 1.0) * fade,
         }
+    }
+
+    /// The isotropic lobe of the same axis, amplitude and energy (sharpness: the geometric
+    /// mean of the two principal ones).
+    pub fn lobe(&self) -> &Sg {
+        &self.iso
     }
 
     /// The 2×2 precision [xx, xy, yy] of the lobe in the orthonormal tangent basis (e1, e2)
@@ -278,7 +294,7 @@ impl Anisotropic {
     /// axis's offset), the attenuation of a misaligned pair is bᵀ P_g P⁻¹ P_h b instead of
     /// λκ/(λ + κ) |b|², and the anisotropy is that of P = P_g + P_h. Equal to the isotropic
     /// product when both lobes are isotropic.
-    fn product(&self, other: &Anisotropic) -> Anisotropic {
+    pub fn product(&self, other: &Anisotropic) -> Anisotropic {
         let (g, h) = (&self.iso, &other.iso);
         let p0 = g.product(h);
         let (lam, kap) = (g.sharpness.max(0.0), h.sharpness.max(0.0));

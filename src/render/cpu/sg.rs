@@ -1,8 +1,8 @@
 //! The SG renderer on the CPU (Xu et al. 2014): direct light with exact shadows plus one bounce of
 //! indirect light from spherical-Gaussian transport, either over a per-point cut of the reflector
 //! tree (`sg`) or over every reflector triangle (`sg-brute`). Visibility between reflectors and
-//! receivers is exact here: one shadow ray per cut node (to its representative triangle) or per
-//! triangle.
+//! receivers is exact here: shadow rays per cut node (to the brightest triangles of its
+//! descendants, [`NODE_VISIBILITY_DEPTH`]) or per triangle.
 //!
 //! Stages: tree build → per light, light every reflector triangle (exact shadow ray at its
 //! centroid) and sum up the tree → primary hits → cut selection (per pixel sample, or per
@@ -290,6 +290,12 @@ pub fn render_sg_quiet(scene: &Scene, accel: &Accel, opts: &SgOptions) -> (Image
     render_sg(scene, accel, opts, &p).expect("not cancelled")
 }
 
+/// How many levels below a cut node its visibility is sampled: 2^depth rays per non-leaf node.
+/// Measured on the dragon at 32×24 against sg-brute (`results/sg-cpu.md`): depth 0 (one ray,
+/// to the node's brightest triangle) 6.3 %, 1: 5.3 %, 2: 5.1 %, 3: 5.1 %, with shading taking
+/// 0.77, 0.97, 1.25 and 1.71 s.
+pub const NODE_VISIBILITY_DEPTH: u32 = 1;
+
 /// Cuts per light and vertex: `cuts[light][vertex]` (empty for vertices no sample needs).
 type VertexCuts = Vec<Vec<Vec<u32>>>;
 
@@ -319,6 +325,39 @@ impl Ctx<'_> {
         let pos = lit.nodes[node as usize].rep;
         let v = lit.tris[pos as usize].vertices;
         (v[0] + v[1] + v[2]) / 3.0
+    }
+
+    /// Visibility of a non-leaf cut node from the receiver (offset point `xo`): one ray to the
+    /// representative (brightest triangle) of each of the node's descendants
+    /// [`NODE_VISIBILITY_DEPTH`] levels down, weighted by its subtree's light weight. Returns
+    /// (fraction, rays).
+    fn node_visibility(&self, xo: Vec3, lit: &LitScene, node: u32) -> (f32, u64) {
+        let depth = NODE_VISIBILITY_DEPTH;
+        let mut stack = [(node, 0u32); 2 << NODE_VISIBILITY_DEPTH];
+        let mut len = 1;
+        let (mut num, mut den, mut rays) = (0.0f32, 0.0f32, 0u64);
+        while len > 0 {
+            len -= 1;
+            let (n, d) = stack[len];
+            match lit.tree.nodes[n as usize].children {
+                Some([a, b]) if d < depth => {
+                    stack[len] = (a, d + 1);
+                    stack[len + 1] = (b, d + 1);
+                    len += 2;
+                }
+                _ => {
+                    let w = lit.nodes[n as usize].weight;
+                    if w > 0.0 {
+                        den += w;
+                        rays += 1;
+                        if self.visible(xo, self.rep_point(lit, n)) {
+                            num += w;
+                        }
+                    }
+                }
+            }
+        }
+        (if den > 0.0 { num / den } else { 0.0 }, rays)
     }
 
     /// Visibility factor of a reflector triangle seen from the receiver (offset point `xo`),
@@ -462,10 +501,9 @@ impl Ctx<'_> {
                     rays += r;
                     l += e.value * f;
                 } else {
-                    rays += 1;
-                    if self.visible(xo, self.rep_point(lit, e.node)) {
-                        l += e.value;
-                    }
+                    let (f, r) = self.node_visibility(xo, lit, e.node);
+                    rays += r;
+                    l += e.value * f;
                 }
             }
         }
@@ -594,177 +632,5 @@ fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 }
 
 #[cfg(test)]
-mod probe {
-    use super::*;
-    use crate::transport::brute_force::{Config, one_bounce_exact_shaded};
-
-    /// Diagnostic for the transport at one pixel: at the centre of pixel (PROBE_X, PROBE_Y) of
-    /// the scene PROBE_SCENE rendered 64 px wide (first light, a point light), every lit
-    /// reflector piece's SG transport (what `sg-brute` sums) against its exact integral with
-    /// the same visibility factor, with shading normals and with flat triangles, summed per
-    /// object, and the pieces that differ most. Slow (an adaptive integral per piece). Run with
-    /// `PROBE_SCENE=scenes/dragon.toml PROBE_X=27 PROBE_Y=29 cargo test --release --lib
-    /// pixel_probe -- --ignored --nocapture`.
-    #[test]
-    #[ignore]
-    fn pixel_probe() {
-        let var = |k: &str| std::env::var(k).unwrap_or_else(|_| panic!("set {k}"));
-        let scene = Scene::load(std::path::Path::new(&var("PROBE_SCENE"))).expect("scene");
-        let px: f32 = var("PROBE_X").parse().expect("PROBE_X");
-        let py: f32 = var("PROBE_Y").parse().expect("PROBE_Y");
-        let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-        let eps = ray_epsilon(&scene);
-        let w = 64;
-        let h = (w as f32 * scene.camera.height as f32 / scene.camera.width as f32).round() as u32;
-        let opts = SgOptions {
-            width: w,
-            height: h,
-            spp: 1,
-            seed: 0,
-            direct: false,
-            indirect: true,
-            brute: true,
-            cut: CutOptions::default(),
-            mode: CutMode::Pixel,
-            max_edge: scene.mesh.diagonal() / 128.0,
-        };
-        let pieces = reflector_pieces(&scene, opts.max_edge);
-        let tree = build_tree(&scene, &pieces);
-        let light = &scene.lights[0];
-        let Light::Point {
-            position,
-            intensity,
-        } = *light
-        else {
-            panic!("the probe handles point lights");
-        };
-        let lits = [light_scene(
-            &scene,
-            &accel,
-            &pieces,
-            &tree,
-            light,
-            eps,
-            ReceiverOptions::default(),
-        )];
-        let camera = scene.camera.with_resolution(w, h);
-        let hit = accel
-            .intersect(
-                camera.position,
-                camera.ray_dir(px + 0.5, py + 0.5),
-                0.0,
-                f32::INFINITY,
-            )
-            .expect("the pixel sees the scene");
-        let ctx = Ctx {
-            scene: &scene,
-            accel: &accel,
-            eps,
-            lits: &lits,
-            opts: &opts,
-            brute: true,
-            camera_pos: camera.position,
-        };
-        let lit = &lits[0];
-        let wo = (camera.position - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
-        let sp = SurfacePoint::from_hit(&scene, &hit, wo).expect("a surface point");
-        let brdf = scene.tri_material(hit.tri);
-        let rx = ReceiverLobes::new(brdf, sp.frame.n, wo);
-        let xo = sp.offset(eps);
-        println!(
-            "receiver: {} {:?}, cos θo {:.3}",
-            scene.tri_object(hit.tri).name,
-            brdf,
-            wo.dot(sp.frame.n)
-        );
-        let lum = |v: DVec3| (v.x + v.y + v.z) / 3.0;
-        // (piece, sg, exact shaded, sg flat, exact flat), each times the visibility factor.
-        let rows: Vec<(usize, [f64; 4])> = lit
-            .tris
-            .par_iter()
-            .enumerate()
-            .filter(|(_, t)| t.sg.is_some())
-            .filter_map(|(i, t)| {
-                let (f, _) = ctx.triangle_visibility(xo, t, light, &rx);
-                if !(f > 0.0) {
-                    return None;
-                }
-                let f = f64::from(f);
-                let lv = f64::from(t.light_visibility);
-                let c = Config {
-                    tri: t.vertices,
-                    brdf_y: *scene.tri_material(t.tri),
-                    light: position,
-                    intensity,
-                    x: sp.p,
-                    n_x: sp.frame.n,
-                    wo,
-                    brdf_x: *brdf,
-                };
-                let normals = pieces[tree.tri_order[i] as usize].normals;
-                let exact = |n| lum(one_bounce_exact_shaded(&c, n, 1e-3, 10)) * lv * f;
-                let refl = crate::transport::Reflector {
-                    vertices: t.vertices,
-                    brdf: c.brdf_y,
-                };
-                let flat = crate::transport::reflector::reflected_sg_light(
-                    &refl,
-                    light,
-                    t.light_visibility,
-                    1.0,
-                )
-                .map(|s| {
-                    let s = crate::transport::aim_at_receiver(&s, sp.p);
-                    let v = crate::transport::receiver::one_bounce_with(
-                        &s,
-                        t.vertices,
-                        sp.p,
-                        &rx,
-                        &lit.receiver,
-                    );
-                    lum(v.as_dvec3()) * f
-                })
-                .unwrap_or(0.0);
-                let sg = lum(t.shade(sp.p, &rx, &lit.receiver).as_dvec3()) * f;
-                Some((i, [sg, exact(Some(normals)), flat, exact(None)]))
-            })
-            .collect();
-        let mut by_obj = std::collections::BTreeMap::<String, [f64; 4]>::new();
-        for (i, v) in &rows {
-            let e = by_obj
-                .entry(scene.tri_object(lit.tris[*i].tri).name.clone())
-                .or_default();
-            for k in 0..4 {
-                e[k] += v[k];
-            }
-        }
-        let total = rows.iter().fold([0.0; 4], |mut a, (_, v)| {
-            for k in 0..4 {
-                a[k] += v[k];
-            }
-            a
-        });
-        by_obj.insert("(all)".into(), total);
-        println!("from          sg (shaded)   exact (shaded)   sg (flat)   exact (flat)");
-        for (o, v) in &by_obj {
-            println!(
-                "{o:12} {:12.5} {:16.5} {:11.5} {:14.5}",
-                v[0], v[1], v[2], v[3]
-            );
-        }
-        let mut rows = rows;
-        rows.sort_by(|a, b| (b.1[0] - b.1[1]).abs().total_cmp(&(a.1[0] - a.1[1]).abs()));
-        for (i, v) in rows.iter().take(10) {
-            let t = &lit.tris[*i];
-            let d = ((t.vertices[0] + t.vertices[1] + t.vertices[2]) / 3.0 - sp.p).length();
-            println!(
-                "  piece {i} ({}, {d:.3} away): sg {:.5} exact {:.5} | flat: sg {:.5} exact {:.5}",
-                scene.tri_object(t.tri).name,
-                v[0],
-                v[1],
-                v[2],
-                v[3]
-            );
-        }
-    }
-}
+#[path = "sg_probes.rs"]
+mod probes;

@@ -1,0 +1,436 @@
+//! Diagnostics of the SG renderer, as ignored tests: the pixel probe (the transport of every
+//! reflector piece at one pixel against its exact integral) and the cut probe (sg against
+//! sg-brute, split into the nodes' approximation and their visibility). See
+//! `docs/sg-renderer.md`.
+
+use super::*;
+use crate::transport::brute_force::{Config, one_bounce_exact_shaded};
+
+/// Diagnostic for the transport at one pixel: at the centre of pixel (PROBE_X, PROBE_Y) of
+/// the scene PROBE_SCENE rendered 64 px wide (first light, a point light), every lit
+/// reflector piece's SG transport (what `sg-brute` sums) against its exact integral with
+/// the same visibility factor, with shading normals and with flat triangles, summed per
+/// object, and the pieces that differ most. Slow (an adaptive integral per piece). Run with
+/// `PROBE_SCENE=scenes/dragon.toml PROBE_X=27 PROBE_Y=29 cargo test --release --lib
+/// pixel_probe -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn pixel_probe() {
+    let var = |k: &str| std::env::var(k).unwrap_or_else(|_| panic!("set {k}"));
+    let scene = Scene::load(std::path::Path::new(&var("PROBE_SCENE"))).expect("scene");
+    let px: f32 = var("PROBE_X").parse().expect("PROBE_X");
+    let py: f32 = var("PROBE_Y").parse().expect("PROBE_Y");
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let eps = ray_epsilon(&scene);
+    let w = 64;
+    let h = (w as f32 * scene.camera.height as f32 / scene.camera.width as f32).round() as u32;
+    let opts = SgOptions {
+        width: w,
+        height: h,
+        spp: 1,
+        seed: 0,
+        direct: false,
+        indirect: true,
+        brute: true,
+        cut: CutOptions::default(),
+        mode: CutMode::Pixel,
+        max_edge: scene.mesh.diagonal() / 128.0,
+    };
+    let pieces = reflector_pieces(&scene, opts.max_edge);
+    let tree = build_tree(&scene, &pieces);
+    let light = &scene.lights[0];
+    let Light::Point {
+        position,
+        intensity,
+    } = *light
+    else {
+        panic!("the probe handles point lights");
+    };
+    let lits = [light_scene(
+        &scene,
+        &accel,
+        &pieces,
+        &tree,
+        light,
+        eps,
+        ReceiverOptions::default(),
+    )];
+    let camera = scene.camera.with_resolution(w, h);
+    let hit = accel
+        .intersect(
+            camera.position,
+            camera.ray_dir(px + 0.5, py + 0.5),
+            0.0,
+            f32::INFINITY,
+        )
+        .expect("the pixel sees the scene");
+    let ctx = Ctx {
+        scene: &scene,
+        accel: &accel,
+        eps,
+        lits: &lits,
+        opts: &opts,
+        brute: true,
+        camera_pos: camera.position,
+    };
+    let lit = &lits[0];
+    let wo = (camera.position - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+    let sp = SurfacePoint::from_hit(&scene, &hit, wo).expect("a surface point");
+    let brdf = scene.tri_material(hit.tri);
+    let rx = ReceiverLobes::new(brdf, sp.frame.n, wo);
+    let xo = sp.offset(eps);
+    println!(
+        "receiver: {} {:?}, cos θo {:.3}",
+        scene.tri_object(hit.tri).name,
+        brdf,
+        wo.dot(sp.frame.n)
+    );
+    let lum = |v: DVec3| (v.x + v.y + v.z) / 3.0;
+    // (piece, sg, exact shaded, sg flat, exact flat), each times the visibility factor.
+    let rows: Vec<(usize, [f64; 4])> = lit
+        .tris
+        .par_iter()
+        .enumerate()
+        .filter(|(_, t)| t.sg.is_some())
+        .filter_map(|(i, t)| {
+            let (f, _) = ctx.triangle_visibility(xo, t, light, &rx);
+            if !(f > 0.0) {
+                return None;
+            }
+            let f = f64::from(f);
+            let lv = f64::from(t.light_visibility);
+            let c = Config {
+                tri: t.vertices,
+                brdf_y: *scene.tri_material(t.tri),
+                light: position,
+                intensity,
+                x: sp.p,
+                n_x: sp.frame.n,
+                wo,
+                brdf_x: *brdf,
+            };
+            let normals = pieces[tree.tri_order[i] as usize].normals;
+            let exact = |n| lum(one_bounce_exact_shaded(&c, n, 1e-3, 10)) * lv * f;
+            let refl = crate::transport::Reflector {
+                vertices: t.vertices,
+                brdf: c.brdf_y,
+            };
+            let flat = crate::transport::reflector::reflected_sg_light(
+                &refl,
+                light,
+                t.light_visibility,
+                1.0,
+            )
+            .map(|s| {
+                let s = crate::transport::aim_at_receiver(&s, sp.p);
+                let v = crate::transport::receiver::one_bounce_with(
+                    &s,
+                    t.vertices,
+                    sp.p,
+                    &rx,
+                    &lit.receiver,
+                );
+                lum(v.as_dvec3()) * f
+            })
+            .unwrap_or(0.0);
+            let sg = lum(t.shade(sp.p, &rx, &lit.receiver).as_dvec3()) * f;
+            Some((i, [sg, exact(Some(normals)), flat, exact(None)]))
+        })
+        .collect();
+    let mut by_obj = std::collections::BTreeMap::<String, [f64; 4]>::new();
+    for (i, v) in &rows {
+        let e = by_obj
+            .entry(scene.tri_object(lit.tris[*i].tri).name.clone())
+            .or_default();
+        for k in 0..4 {
+            e[k] += v[k];
+        }
+    }
+    let total = rows.iter().fold([0.0; 4], |mut a, (_, v)| {
+        for k in 0..4 {
+            a[k] += v[k];
+        }
+        a
+    });
+    by_obj.insert("(all)".into(), total);
+    println!("from          sg (shaded)   exact (shaded)   sg (flat)   exact (flat)");
+    for (o, v) in &by_obj {
+        println!(
+            "{o:12} {:12.5} {:16.5} {:11.5} {:14.5}",
+            v[0], v[1], v[2], v[3]
+        );
+    }
+    let mut rows = rows;
+    rows.sort_by(|a, b| (b.1[0] - b.1[1]).abs().total_cmp(&(a.1[0] - a.1[1]).abs()));
+    for (i, v) in rows.iter().take(10) {
+        let t = &lit.tris[*i];
+        let d = ((t.vertices[0] + t.vertices[1] + t.vertices[2]) / 3.0 - sp.p).length();
+        println!(
+            "  piece {i} ({}, {d:.3} away): sg {:.5} exact {:.5} | flat: sg {:.5} exact {:.5}",
+            scene.tri_object(t.tri).name,
+            v[0],
+            v[1],
+            v[2],
+            v[3]
+        );
+    }
+}
+
+/// Diagnostic for the cut: at the centre of every pixel of PROBE_SCENE rendered PROBE_W px
+/// wide, splits sg's difference from sg-brute into the cut's approximation (no visibility on
+/// either side) and the visibility of non-leaf nodes (one ray to the representative against
+/// the per-triangle visibility of sg-brute). Prints rel_rmse (rmse / mean, luminance) of
+/// each. Run with `PROBE_SCENE=scenes/dragon.toml PROBE_W=32 cargo test --release --lib
+/// cut_probe -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn cut_probe() {
+    let var = |k: &str| std::env::var(k).unwrap_or_else(|_| panic!("set {k}"));
+    let scene = Scene::load(std::path::Path::new(&var("PROBE_SCENE"))).expect("scene");
+    let w: u32 = var("PROBE_W").parse().expect("PROBE_W");
+    let max_cut: u32 = std::env::var("PROBE_CAP")
+        .ok()
+        .map_or(1000, |s| s.parse().expect("PROBE_CAP"));
+    let detail = std::env::var("PROBE_X").ok().map(|x| {
+        (
+            x.parse::<u32>().expect("PROBE_X"),
+            var("PROBE_Y").parse::<u32>().expect("PROBE_Y"),
+        )
+    });
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let eps = ray_epsilon(&scene);
+    let h = (w as f32 * scene.camera.height as f32 / scene.camera.width as f32).round() as u32;
+    let opts = SgOptions {
+        width: w,
+        height: h,
+        spp: 1,
+        seed: 0,
+        direct: false,
+        indirect: true,
+        brute: false,
+        cut: CutOptions {
+            max_cut,
+            ..CutOptions::default()
+        },
+        mode: CutMode::Pixel,
+        max_edge: scene.mesh.diagonal() / 128.0,
+    };
+    let pieces = reflector_pieces(&scene, opts.max_edge);
+    let tree = build_tree(&scene, &pieces);
+    let light = &scene.lights[0];
+    let lits = [light_scene(
+        &scene,
+        &accel,
+        &pieces,
+        &tree,
+        light,
+        eps,
+        ReceiverOptions::default(),
+    )];
+    let lit = &lits[0];
+    let camera = scene.camera.with_resolution(w, h);
+    let ctx = Ctx {
+        scene: &scene,
+        accel: &accel,
+        eps,
+        lits: &lits,
+        opts: &opts,
+        brute: false,
+        camera_pos: camera.position,
+    };
+    let lum = |v: Vec3| f64::from(v.x + v.y + v.z) / 3.0;
+    // Per pixel: [brute no vis, cut no vis, brute vis, cut vis, cut with ideal node vis].
+    let rows: Vec<[f64; 5]> = (0..w * h)
+        .into_par_iter()
+        .filter(|p| detail.is_none_or(|d| d == (p % w, p / w)))
+        .map(|p| {
+            let (px, py) = (p % w, p / w);
+            let Some(hit) = accel.intersect(
+                camera.position,
+                camera.ray_dir(px as f32 + 0.5, py as f32 + 0.5),
+                0.0,
+                f32::INFINITY,
+            ) else {
+                return [0.0; 5];
+            };
+            if !scene.tri_object(hit.tri).receiver {
+                return [0.0; 5];
+            }
+            let wo = (camera.position - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+            let Some(sp) = SurfacePoint::from_hit(&scene, &hit, wo) else {
+                return [0.0; 5];
+            };
+            let rx = ReceiverLobes::new(scene.tri_material(hit.tri), sp.frame.n, wo);
+            if rx.is_black() {
+                return [0.0; 5];
+            }
+            let xo = sp.offset(eps);
+            // Per leaf: (value, visible value).
+            let leaf: Vec<(Vec3, Vec3)> = lit
+                .tris
+                .iter()
+                .map(|t| {
+                    if t.sg.is_none() {
+                        return (Vec3::ZERO, Vec3::ZERO);
+                    }
+                    let v = t.shade(sp.p, &rx, &lit.receiver);
+                    if v == Vec3::ZERO {
+                        return (v, v);
+                    }
+                    let (f, _) = ctx.triangle_visibility(xo, t, light, &rx);
+                    (v, v * f)
+                })
+                .collect();
+            let b0 = leaf.iter().fold(Vec3::ZERO, |a, l| a + l.0);
+            let b1 = leaf.iter().fold(Vec3::ZERO, |a, l| a + l.1);
+            let mut cut = Vec::new();
+            let mut c = CutCounters::default();
+            let c0 = lit.select(sp.p, &rx, &opts.cut, &mut cut, &mut c);
+            let (mut c1, mut c2) = (Vec3::ZERO, Vec3::ZERO);
+            if detail == Some((px, py)) {
+                let mut d: Vec<(f64, String)> = cut
+                    .iter()
+                    .map(|e| {
+                        let n = &lit.tree.nodes[e.node as usize];
+                        let (s, k) = (n.first as usize, n.count as usize);
+                        let v = lum(leaf[s..s + k].iter().fold(Vec3::ZERO, |a, l| a + l.1));
+                        let vis = n.is_leaf() || ctx.visible(xo, ctx.rep_point(lit, e.node));
+                        let value = if n.is_leaf() {
+                            v
+                        } else if vis {
+                            lum(e.value)
+                        } else {
+                            0.0
+                        };
+                        let t = &lit.tris[lit.nodes[e.node as usize].rep as usize];
+                        let dist = (n.bbox_min + n.bbox_max - 2.0 * sp.p).length() * 0.5;
+                        let diag = (n.bbox_max - n.bbox_min).length();
+                        (
+                            value - v,
+                            format!(
+                                "node {} count {k} {} dist {dist:.3} diag {diag:.3}: \
+                                 value {:.5} exact {v:.5} bound {:.5}",
+                                e.node,
+                                scene.tri_object(t.tri).name,
+                                lum(e.value),
+                                lum(e.bound)
+                            ),
+                        )
+                    })
+                    .collect();
+                let total: f64 = d.iter().map(|x| x.0).sum();
+                let pos: f64 = d.iter().map(|x| x.0.max(0.0)).sum();
+                let bsum: f64 = cut.iter().map(|e| lum(e.bound)).sum();
+                println!(
+                    "pixel ({px},{py}) cut {} leaves {}: Σ diff {total:.5} (+{pos:.5}), Σ bound {bsum:.4}",
+                    cut.len(),
+                    cut.iter()
+                        .filter(|e| lit.tree.nodes[e.node as usize].is_leaf())
+                        .count()
+                );
+                let mut groups = std::collections::BTreeMap::<String, [f64; 4]>::new();
+                for e in &cut {
+                    let n = &lit.tree.nodes[e.node as usize];
+                    let (s, k) = (n.first as usize, n.count as usize);
+                    let v = lum(leaf[s..s + k].iter().fold(Vec3::ZERO, |a, l| a + l.0));
+                    let t = &lit.tris[lit.nodes[e.node as usize].rep as usize];
+                    let b = lum(e.bound);
+                    let key = format!(
+                        "{} {}",
+                        scene.tri_object(t.tri).name,
+                        if v < 0.01 * b { "tight<1%" } else if v < 0.1 * b { "1-10%" } else { ">10%" }
+                    );
+                    let g = groups.entry(key).or_default();
+                    g[0] += 1.0;
+                    g[1] += b;
+                    g[2] += v;
+                    g[3] += (lum(e.value) - v).abs();
+                }
+                let mut tight: Vec<_> = cut
+                    .iter()
+                    .filter(|e| {
+                        let n = &lit.tree.nodes[e.node as usize];
+                        let (s, k) = (n.first as usize, n.count as usize);
+                        let v = lum(leaf[s..s + k].iter().fold(Vec3::ZERO, |a, l| a + l.0));
+                        v < 0.01 * lum(e.bound)
+                    })
+                    .collect();
+                tight.sort_by(|a, b| lum(b.bound).total_cmp(&lum(a.bound)));
+                let mut hist = [0usize; 24];
+                for e in &tight {
+                    let k = lit.tree.nodes[e.node as usize].count;
+                    hist[(k as f32).log2() as usize] += 1;
+                }
+                println!("  tight nodes by log2(count): {hist:?}");
+                for e in tight.iter().take(8) {
+                    let n = &lit.tree.nodes[e.node as usize];
+                    println!(
+                        "  tight node {} count {} cone {:?}: bound {:.4} parts {:?}",
+                        e.node,
+                        n.count,
+                        n.cone.map(|c| c.half_angle),
+                        lum(e.bound),
+                        lit.bound_parts(e.node, sp.p, &rx)
+                    );
+                }
+                for (k, g) in &groups {
+                    println!("  group {k:20} nodes {:5} Σ bound {:.4} Σ exact {:.4} Σ|err| {:.4}", g[0], g[1], g[2], g[3]);
+                }
+                d.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+                for x in d.iter().take(15) {
+                    println!("  {:+.5} {}", x.0, x.1);
+                }
+            }
+            for e in &cut {
+                let n = &lit.tree.nodes[e.node as usize];
+                let (s, k) = (n.first as usize, n.count as usize);
+                let (v, vv) = leaf[s..s + k]
+                    .iter()
+                    .fold((Vec3::ZERO, Vec3::ZERO), |a, l| (a.0 + l.0, a.1 + l.1));
+                if n.is_leaf() {
+                    c1 += vv;
+                    c2 += vv;
+                    continue;
+                }
+                c1 += e.value * ctx.node_visibility(xo, lit, e.node).0;
+                let lv = lum(v);
+                if lv > 0.0 {
+                    c2 += e.value * (lum(vv) / lv) as f32;
+                }
+            }
+            [lum(b0), lum(c0), lum(b1), lum(c1), lum(c2)]
+        })
+        .collect();
+    let rel = |a: usize, b: usize| {
+        let mean = rows.iter().map(|r| r[b]).sum::<f64>() / rows.len() as f64;
+        let mse = rows.iter().map(|r| (r[a] - r[b]).powi(2)).sum::<f64>() / rows.len() as f64;
+        mse.sqrt() / mean
+    };
+    println!("pixels {}, cap {max_cut}", rows.len());
+    println!("cut vs brute, no visibility:        {:.4}", rel(1, 0));
+    println!("cut vs brute, with visibility:      {:.4}", rel(3, 2));
+    println!("cut (ideal node vis) vs brute vis:  {:.4}", rel(4, 2));
+    println!("brute vis vs brute no vis:          {:.4}", rel(2, 0));
+    let mean = |k: usize| rows.iter().map(|r| r[k]).sum::<f64>() / rows.len() as f64;
+    println!("means: {:?}", (0..5).map(mean).collect::<Vec<_>>());
+    if detail.is_some() {
+        return;
+    }
+    let mut idx: Vec<usize> = (0..rows.len()).collect();
+    idx.sort_by(|&a, &b| {
+        (rows[b][3] - rows[b][2])
+            .abs()
+            .total_cmp(&(rows[a][3] - rows[a][2]).abs())
+    });
+    for &i in idx.iter().take(12) {
+        println!(
+            "  pixel ({}, {}): brute {:.4} cut {:.4} (with vis: {:.4} {:.4})",
+            i as u32 % w,
+            i as u32 / w,
+            rows[i][0],
+            rows[i][1],
+            rows[i][2],
+            rows[i][3]
+        );
+    }
+}
