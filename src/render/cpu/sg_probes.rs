@@ -240,6 +240,9 @@ fn cut_probe() {
     };
     let lum = |v: Vec3| f64::from(v.x + v.y + v.z) / 3.0;
     // Per pixel: [brute no vis, cut no vis, brute vis, cut vis, cut with ideal node vis].
+    // Σ |value − leaves| and Σ (value − leaves) (no visibility) of internal cut nodes, and
+    // their number, by receiver object, node object and size.
+    let groups = std::sync::Mutex::new(std::collections::BTreeMap::<String, [f64; 3]>::new());
     let rows: Vec<[f64; 5]> = (0..w * h)
         .into_par_iter()
         .filter(|p| detail.is_none_or(|d| d == (p % w, p / w)))
@@ -398,6 +401,29 @@ fn cut_probe() {
                     c2 += e.value * (lum(vv) / lv) as f32;
                 }
             }
+            {
+                let mut g = groups.lock().expect("not poisoned");
+                let rx_name = &scene.tri_object(hit.tri).name;
+                for e in &cut {
+                    let n = &lit.tree.nodes[e.node as usize];
+                    if n.is_leaf() {
+                        continue;
+                    }
+                    let (s, k) = (n.first as usize, n.count as usize);
+                    let v = lum(leaf[s..s + k].iter().fold(Vec3::ZERO, |a, l| a + l.0));
+                    let t = &lit.tris[lit.nodes[e.node as usize].rep as usize];
+                    let key = format!(
+                        "{rx_name:>6} <- {:6} count ~2^{:2}",
+                        scene.tri_object(t.tri).name,
+                        (k as f32).log2().round() as u32
+                    );
+                    let d = lum(e.value) - v;
+                    let x = g.entry(key).or_default();
+                    x[0] += d.abs();
+                    x[1] += d;
+                    x[2] += 1.0;
+                }
+            }
             [lum(b0), lum(c0), lum(b1), lum(c1), lum(c2)]
         })
         .collect();
@@ -413,6 +439,19 @@ fn cut_probe() {
     println!("brute vis vs brute no vis:          {:.4}", rel(2, 0));
     let mean = |k: usize| rows.iter().map(|r| r[k]).sum::<f64>() / rows.len() as f64;
     println!("means: {:?}", (0..5).map(mean).collect::<Vec<_>>());
+    let groups = groups.into_inner().expect("not poisoned");
+    let total: f64 = groups.values().map(|g| g[0]).sum();
+    let mut by_err: Vec<_> = groups.iter().collect();
+    by_err.sort_by(|a, b| b.1[0].total_cmp(&a.1[0]));
+    println!("internal cut nodes by |error| share (no visibility):");
+    for (k, g) in by_err.iter().take(20) {
+        println!(
+            "  {k}: {:5.1} % of Σ|err|, bias {:+.4}, nodes {}",
+            100.0 * g[0] / total,
+            g[1] / g[0].max(1e-30),
+            g[2]
+        );
+    }
     if detail.is_some() {
         return;
     }
