@@ -14,6 +14,7 @@
 //! - [`brdf`]: exact analytic BRDF models with importance sampling.
 //! - [`scene`]: the scene-file schema, mesh loading, procedural shapes; immutable once loaded.
 //! - [`accel`]: the BVH (obvhs) for rays and occlusion.
+//! - [`visibility`]: approximate visibility (variance shadow maps).
 //! - [`render`]: the renderers (CPU, rayon).
 //! - [`image`]: image buffers, EXR/PNG I/O, tonemapping.
 //! - [`compare`]: error metrics and false-colour error maps.
@@ -33,3 +34,4 @@ pub mod precompute;
 pub mod render;
 pub mod scene;
 pub mod transport;
+pub mod visibility;

@@ -428,6 +428,29 @@ fn bad_cli_arguments_fail_cleanly() {
 }
 
 #[test]
+fn bad_visibility_settings_are_named() {
+    for (body, field) in [
+        (
+            "shadow_map_resolution = 8",
+            "visibility.shadow_map_resolution",
+        ),
+        (
+            "shadow_map_resolution = 100000",
+            "visibility.shadow_map_resolution",
+        ),
+        ("vsm_blur = 99", "visibility.vsm_blur"),
+        ("light_bleeding = 1.0", "visibility.light_bleeding"),
+        ("light_bleeding = -0.1", "visibility.light_bleeding"),
+        ("light_bleeding = nan", "visibility.light_bleeding"),
+        ("shadowmap = 512", "shadowmap"),
+    ] {
+        let c = Case::new();
+        let s = scene_with(&c, &format!("{GOOD_HEAD}{PLANE}\n[visibility]\n{body}\n"));
+        assert_rejected(&c, &s, &["scene.toml", field]);
+    }
+}
+
+#[test]
 fn bad_sg_settings_are_named() {
     for (body, field) in [
         ("threshold = -0.5", "methods.sg.threshold"),

@@ -23,7 +23,8 @@ pub struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value_t = Method::Reference)]
     pub method: Method,
-    /// Visibility for sg / sg-brute (exact: shadow rays through the BVH).
+    /// Visibility for sg / sg-brute (exact: shadow rays through the BVH; vsm: variance shadow
+    /// maps for the light, with the scene's [visibility] settings).
     #[arg(long, value_enum, default_value_t = Visibility::Exact)]
     pub visibility: Visibility,
     /// Where sg selects cuts (default: the scene's methods.sg.cut).
@@ -279,6 +280,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             cut,
             mode: cut_mode,
             max_edge,
+            visibility: args.visibility,
         };
         let result = progress::run(sg_work_units(&opts), args.quiet, |prog| {
             pool.install(|| render_sg(&scene, &accel, &opts, prog))

@@ -389,8 +389,9 @@ pub fn build_tree(scene: &Scene, pieces: &[ReflectorPiece]) -> ReflectorTree {
 }
 
 /// Lights the reflector pieces `order` (indices into `pieces`, e.g. a tree's `tri_order`) with
-/// `light`; `visible(point, tri)` is the light's visibility at a point of a triangle (exact: a
-/// shadow ray; later a shadow map). A piece's visibility is the mean over its centroid and the
+/// `light`; `visible(point, tri)` is the light's visibility in [0, 1] at a point of a triangle
+/// (a shadow ray, or a shadow map's lit fraction); `light_mask` marks the points more than half
+/// lit. A piece's visibility is the mean over its centroid and the
 /// centroids of its three corner sub-triangles, so that a triangle half in shadow (e.g. a floor
 /// triangle under the foot of an object) reflects about half its light rather than all or
 /// nothing.
@@ -416,12 +417,15 @@ pub fn light_triangles(
             let mut mask = 0u8;
             let sg = match light.incident(c) {
                 Some(_) => {
+                    let mut sum = 0.0;
                     for (k, &p) in visibility_points(refl.vertices).iter().enumerate() {
-                        if visible(p, t) > 0.0 {
+                        let f = visible(p, t).clamp(0.0, 1.0);
+                        sum += f;
+                        if f > 0.5 {
                             mask |= 1 << k;
                         }
                     }
-                    let v = 0.25 * mask.count_ones() as f32;
+                    let v = 0.25 * sum;
                     vis = v;
                     if v > 0.0 {
                         reflected_sg_light_shaded(&refl, Some(piece.normals), light, v, scale)

@@ -24,4 +24,7 @@ pub enum Visibility {
     /// Shadow rays through the BVH: one per reflector triangle from the light, one per cut node
     /// (or triangle) from the receiver.
     Exact,
+    /// Variance shadow maps for the light's visibility (direct light and the light on every
+    /// reflector piece), shadow rays between reflectors and receivers as in `exact`.
+    Vsm,
 }

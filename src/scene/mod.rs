@@ -24,6 +24,10 @@ pub const MAX_SEGMENTS: u32 = 65536;
 pub const MAX_SUBDIVISIONS: u32 = 4096;
 /// Upper bound on samples per pixel accepted from scene files and the command line.
 pub const MAX_SPP: u32 = 1 << 20;
+/// Largest accepted `visibility.shadow_map_resolution` (a point light's cube of 6 faces at this
+/// size holds 6 × 4096² × 8 bytes = 805 MB).
+pub const MAX_SHADOW_MAP: u32 = 4096;
+
 /// Largest accepted `methods.sg.max_cut`.
 pub const MAX_CUT: u32 = 1 << 24;
 
@@ -143,6 +147,8 @@ pub struct RenderSettings {
     pub seed: u64,
     pub reference: ReferenceSpec,
     pub sg: SgSpec,
+    /// Variance shadow maps (`[visibility]`).
+    pub vsm: crate::visibility::vsm::VsmOptions,
 }
 
 /// A loaded, validated scene.
@@ -385,6 +391,28 @@ impl Builder {
                 format!("must be between 1 and {MAX_SPP}, got {}", sg.spp),
             ));
         }
+        let v = file.visibility;
+        if !(16..=MAX_SHADOW_MAP).contains(&v.shadow_map_resolution) {
+            return Err(self.err(
+                "visibility.shadow_map_resolution",
+                format!(
+                    "must be between 16 and {MAX_SHADOW_MAP} texels, got {}",
+                    v.shadow_map_resolution
+                ),
+            ));
+        }
+        if v.vsm_blur > 32 {
+            return Err(self.err(
+                "visibility.vsm_blur",
+                format!("must be between 0 and 32 texels, got {}", v.vsm_blur),
+            ));
+        }
+        if !(v.light_bleeding.is_finite() && (0.0..1.0).contains(&v.light_bleeding)) {
+            return Err(self.err(
+                "visibility.light_bleeding",
+                format!("must be in [0, 1), got {}", v.light_bleeding),
+            ));
+        }
         Ok(Scene {
             name,
             path: self.path.clone(),
@@ -398,6 +426,11 @@ impl Builder {
                 seed: render.seed,
                 reference: r,
                 sg,
+                vsm: crate::visibility::vsm::VsmOptions {
+                    resolution: v.shadow_map_resolution,
+                    blur: v.vsm_blur,
+                    light_bleeding: v.light_bleeding,
+                },
             },
             inputs,
             warnings: self.warnings,

@@ -23,6 +23,45 @@ pub struct SceneFile {
     pub render: RenderSpec,
     #[serde(default)]
     pub methods: MethodsSpec,
+    #[serde(default)]
+    pub visibility: VisibilitySpec,
+}
+
+/// Settings of the approximate visibility (`render --visibility vsm`).
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VisibilitySpec {
+    /// Texels per side of each variance-shadow-map face.
+    #[serde(default = "default_shadow_map_resolution")]
+    pub shadow_map_resolution: u32,
+    /// Radius of the shadow maps' Gaussian blur, in texels (0 = none).
+    #[serde(default = "default_vsm_blur")]
+    pub vsm_blur: u32,
+    /// Light-bleeding reduction of the variance shadow maps, in [0, 1) (0 = none).
+    #[serde(default = "default_light_bleeding")]
+    pub light_bleeding: f32,
+}
+
+fn default_shadow_map_resolution() -> u32 {
+    crate::visibility::vsm::VsmOptions::default().resolution
+}
+
+fn default_vsm_blur() -> u32 {
+    crate::visibility::vsm::VsmOptions::default().blur
+}
+
+fn default_light_bleeding() -> f32 {
+    crate::visibility::vsm::VsmOptions::default().light_bleeding
+}
+
+impl Default for VisibilitySpec {
+    fn default() -> Self {
+        VisibilitySpec {
+            shadow_map_resolution: default_shadow_map_resolution(),
+            vsm_blur: default_vsm_blur(),
+            light_bleeding: default_light_bleeding(),
+        }
+    }
 }
 
 #[derive(Debug, Deserialize)]

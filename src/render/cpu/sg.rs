@@ -9,7 +9,9 @@
 //! receiver vertex) → shading. Each stage is timed; see [`SgStats`].
 
 use super::reference::Progress;
-use super::surface::{SurfacePoint, light_visible, ray_epsilon, reflected_light};
+use super::surface::{
+    SurfacePoint, light_visible, ray_epsilon, reflected_light, reflected_light_with,
+};
 use crate::accel::{Accel, Hit};
 use crate::cut::{
     CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, ReflectorPiece, build_tree,
@@ -17,8 +19,10 @@ use crate::cut::{
 };
 use crate::image::Image;
 use crate::precompute::tree::{self, ReflectorTree};
+use crate::render::Visibility;
 use crate::scene::{Light, Scene};
 use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
+use crate::visibility::vsm::VarianceShadowMap;
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -53,12 +57,16 @@ pub struct SgOptions {
     pub mode: CutMode,
     /// Reflector triangles are split until their longest edge is at most this (0: never).
     pub max_edge: f32,
+    /// Light visibility by shadow rays or by variance shadow maps (the scene's `[visibility]`).
+    pub visibility: Visibility,
 }
 
 /// Seconds per stage.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct SgTimes {
     pub tree: f64,
+    /// Variance shadow maps (`--visibility vsm`; 0 otherwise).
+    pub shadow_maps: f64,
     pub lighting: f64,
     pub primary: f64,
     pub vertex_cuts: f64,
@@ -164,14 +172,39 @@ pub fn render_sg(
     stats.tree_nodes = tree.nodes.len();
     let brute = opts.brute || !tree::needs_tree(tree.tri_order.len());
 
-    // Light every reflector triangle, per light, with an exact shadow ray at its centroid.
+    // Shadow maps (`--visibility vsm`), one per light.
+    let t = Instant::now();
+    let maps: Vec<Option<VarianceShadowMap>> = scene
+        .lights
+        .iter()
+        .map(|light| {
+            (opts.visibility == Visibility::Vsm).then(|| {
+                VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
+            })
+        })
+        .collect();
+    stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
+
+    // Light every reflector piece, per light (shadow rays or the shadow map at four points).
     let t = Instant::now();
     let rx_opts = ReceiverOptions::default();
     let lits: Vec<LitScene> = if opts.indirect && !tree.is_empty() {
         scene
             .lights
             .iter()
-            .map(|light| light_scene(scene, accel, &pieces, &tree, light, eps, rx_opts))
+            .zip(&maps)
+            .map(|(light, map)| {
+                light_scene(
+                    scene,
+                    accel,
+                    &pieces,
+                    &tree,
+                    light,
+                    map.as_ref(),
+                    eps,
+                    rx_opts,
+                )
+            })
             .collect()
     } else {
         Vec::new()
@@ -201,6 +234,7 @@ pub fn render_sg(
         accel,
         eps,
         lits: &lits,
+        maps: &maps,
         opts,
         brute,
         camera_pos: camera.position,
@@ -259,23 +293,41 @@ pub fn render_sg(
     Some((img, stats))
 }
 
-/// The reflector pieces lit by `light` (exact shadow rays) and summed up `tree`.
+/// The light's visibility at surface point `p` in [0, 1]: a shadow ray (offset `eps` towards
+/// the light), or the lit fraction of the light's variance shadow map at the same offset point.
+fn light_fraction(
+    accel: &Accel,
+    light: &Light,
+    map: Option<&VarianceShadowMap>,
+    p: Vec3,
+    eps: f32,
+) -> f32 {
+    match map {
+        None => {
+            if light_visible(accel, light, p, eps) {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        Some(m) => light.incident(p).map_or(0.0, |inc| m.lit(p + inc.wi * eps)),
+    }
+}
+
+/// The reflector pieces lit by `light` (shadow rays, or its shadow map `map`) and summed up
+/// `tree`.
+#[allow(clippy::too_many_arguments)]
 fn light_scene<'t>(
     scene: &Scene,
     accel: &Accel,
     pieces: &[ReflectorPiece],
     tree: &'t ReflectorTree,
     light: &Light,
+    map: Option<&VarianceShadowMap>,
     eps: f32,
     rx_opts: ReceiverOptions,
 ) -> LitScene<'t> {
-    let visible = |c: Vec3, _t: u32| -> f32 {
-        if light_visible(accel, light, c, eps) {
-            1.0
-        } else {
-            0.0
-        }
-    };
+    let visible = |c: Vec3, _t: u32| -> f32 { light_fraction(accel, light, map, c, eps) };
     let tris = light_triangles(scene, pieces, &tree.tri_order, light, &visible);
     LitScene::new(tree, tris, light_anchor(scene, light), rx_opts)
 }
@@ -304,6 +356,8 @@ struct Ctx<'a> {
     accel: &'a Accel,
     eps: f32,
     lits: &'a [LitScene<'a>],
+    /// Per light: its variance shadow map (`--visibility vsm`), or none (shadow rays).
+    maps: &'a [Option<VarianceShadowMap>],
     opts: &'a SgOptions,
     brute: bool,
     camera_pos: Vec3,
@@ -373,9 +427,11 @@ impl Ctx<'_> {
         &self,
         xo: Vec3,
         t: &LitTriangle,
-        light: &crate::scene::Light,
+        k_light: usize,
         rx: &ReceiverLobes,
     ) -> (f32, u64) {
+        let light = &self.scene.lights[k_light];
+        let map = self.maps.get(k_light).and_then(Option::as_ref);
         let [a, b, c] = t.vertices;
         let mut rays = 0;
         let weight = |p: Vec3| -> f32 {
@@ -411,12 +467,14 @@ impl Ctx<'_> {
             den += w;
             if w > 0.0 {
                 rays += 1;
-                let lit = t.light_visibility >= 1.0 || {
-                    rays += 1;
-                    light_visible(self.accel, light, p, self.eps)
+                let lit = if t.light_visibility >= 1.0 {
+                    1.0
+                } else {
+                    rays += u64::from(map.is_none());
+                    light_fraction(self.accel, light, map, p, self.eps)
                 };
-                if lit && self.visible(xo, p) {
-                    num += w;
+                if lit > 0.0 && self.visible(xo, p) {
+                    num += w * lit;
                 }
             }
         }
@@ -444,8 +502,13 @@ impl Ctx<'_> {
         let brdf = self.scene.tri_material(hit.tri);
         let mut l = Vec3::ZERO;
         if self.opts.direct {
-            for light in &self.scene.lights {
-                l += reflected_light(self.accel, brdf, &sp, wo, light, self.eps);
+            for (k, light) in self.scene.lights.iter().enumerate() {
+                l += match self.maps.get(k).and_then(Option::as_ref) {
+                    None => reflected_light(self.accel, brdf, &sp, wo, light, self.eps),
+                    Some(m) => reflected_light_with(brdf, &sp, wo, light, |inc| {
+                        m.lit(sp.offset(self.eps) + inc.wi * self.eps)
+                    }),
+                };
             }
         }
         if !self.opts.indirect || !self.scene.tri_object(hit.tri).receiver {
@@ -457,7 +520,7 @@ impl Ctx<'_> {
         }
         let xo = sp.offset(self.eps);
         let mut rays = 0u64;
-        for (k, (light, lit)) in self.scene.lights.iter().zip(self.lits).enumerate() {
+        for (k, lit) in self.lits.iter().enumerate() {
             tally.shading_points.fetch_add(1, Ordering::Relaxed);
             if self.brute {
                 let mut c = CutCounters::default();
@@ -469,7 +532,7 @@ impl Ctx<'_> {
                     c.leaves += 1;
                     let v = t.shade(sp.p, &rx, &lit.receiver);
                     if v != Vec3::ZERO {
-                        let (f, r) = self.triangle_visibility(xo, t, light, &rx);
+                        let (f, r) = self.triangle_visibility(xo, t, k, &rx);
                         rays += r;
                         l += v * f;
                     }
@@ -497,7 +560,7 @@ impl Ctx<'_> {
                 let n = &lit.tree.nodes[e.node as usize];
                 if n.is_leaf() {
                     let t = &lit.tris[n.first as usize];
-                    let (f, r) = self.triangle_visibility(xo, t, light, &rx);
+                    let (f, r) = self.triangle_visibility(xo, t, k, &rx);
                     rays += r;
                     l += e.value * f;
                 } else {

@@ -35,6 +35,7 @@ fn pixel_probe() {
         cut: CutOptions::default(),
         mode: CutMode::Pixel,
         max_edge: scene.mesh.diagonal() / 128.0,
+        visibility: crate::render::Visibility::Exact,
     };
     let pieces = reflector_pieces(&scene, opts.max_edge);
     let tree = build_tree(&scene, &pieces);
@@ -52,6 +53,7 @@ fn pixel_probe() {
         &pieces,
         &tree,
         light,
+        None,
         eps,
         ReceiverOptions::default(),
     )];
@@ -69,6 +71,7 @@ fn pixel_probe() {
         accel: &accel,
         eps,
         lits: &lits,
+        maps: &[None],
         opts: &opts,
         brute: true,
         camera_pos: camera.position,
@@ -93,7 +96,7 @@ fn pixel_probe() {
         .enumerate()
         .filter(|(_, t)| t.sg.is_some())
         .filter_map(|(i, t)| {
-            let (f, _) = ctx.triangle_visibility(xo, t, light, &rx);
+            let (f, _) = ctx.triangle_visibility(xo, t, 0, &rx);
             if !(f > 0.0) {
                 return None;
             }
@@ -214,6 +217,7 @@ fn cut_probe() {
         },
         mode: CutMode::Pixel,
         max_edge: scene.mesh.diagonal() / 128.0,
+        visibility: crate::render::Visibility::Exact,
     };
     let pieces = reflector_pieces(&scene, opts.max_edge);
     let tree = build_tree(&scene, &pieces);
@@ -224,6 +228,7 @@ fn cut_probe() {
         &pieces,
         &tree,
         light,
+        None,
         eps,
         ReceiverOptions::default(),
     )];
@@ -234,6 +239,7 @@ fn cut_probe() {
         accel: &accel,
         eps,
         lits: &lits,
+        maps: &[None],
         opts: &opts,
         brute: false,
         camera_pos: camera.position,
@@ -280,7 +286,7 @@ fn cut_probe() {
                     if v == Vec3::ZERO {
                         return (v, v);
                     }
-                    let (f, _) = ctx.triangle_visibility(xo, t, light, &rx);
+                    let (f, _) = ctx.triangle_visibility(xo, t, 0, &rx);
                     (v, v * f)
                 })
                 .collect();

@@ -71,6 +71,24 @@ pub fn reflected_light(
     light: &Light,
     eps: f32,
 ) -> Vec3 {
+    reflected_light_with(brdf, sp, w_out, light, |inc| {
+        if shadow_ray_clear(accel, sp.offset(eps), inc, eps) {
+            1.0
+        } else {
+            0.0
+        }
+    })
+}
+
+/// [`reflected_light`] with the light's visibility given by `visibility` (called only when the
+/// light reflects something towards `w_out`), e.g. from a shadow map.
+pub fn reflected_light_with(
+    brdf: &Brdf,
+    sp: &SurfacePoint,
+    w_out: Vec3,
+    light: &Light,
+    visibility: impl FnOnce(&Incident) -> f32,
+) -> Vec3 {
     let Some(inc) = light.incident(sp.p) else {
         return Vec3::ZERO;
     };
@@ -86,10 +104,11 @@ pub fn reflected_light(
     if f == Vec3::ZERO || inc.irradiance == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    if !shadow_ray_clear(accel, sp.offset(eps), &inc, eps) {
+    let v = visibility(&inc);
+    if !(v > 0.0) {
         return Vec3::ZERO;
     }
-    f * wi_l.z * inc.irradiance
+    f * wi_l.z * inc.irradiance * v
 }
 
 /// Whether the shadow ray from `origin` (already offset off its surface) towards the light that
