@@ -411,7 +411,7 @@ fn bad_cli_arguments_fail_cleanly() {
         vec!["--method", "sg", "--threshold", "2"],
         vec!["--method", "sg", "--threshold", "NaN"],
         vec!["--method", "sg", "--cut", "triangle"],
-        vec!["--method", "sg", "--visibility", "approx"],
+        vec!["--method", "sg", "--visibility", "rays"],
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_interreflect"))
             .arg("render")
@@ -443,6 +443,11 @@ fn bad_visibility_settings_are_named() {
         ("light_bleeding = -0.1", "visibility.light_bleeding"),
         ("light_bleeding = nan", "visibility.light_bleeding"),
         ("shadowmap = 512", "shadowmap"),
+        ("vpl_count = 0", "visibility.vpl_count"),
+        ("ism_resolution = 2", "visibility.ism_resolution"),
+        ("ism_points = 0", "visibility.ism_points"),
+        ("ism_bias = -1", "visibility.ism_bias"),
+        ("ism_bias = inf", "visibility.ism_bias"),
     ] {
         let c = Case::new();
         let s = scene_with(&c, &format!("{GOOD_HEAD}{PLANE}\n[visibility]\n{body}\n"));

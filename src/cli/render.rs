@@ -24,7 +24,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Method::Reference)]
     pub method: Method,
     /// Visibility for sg / sg-brute (exact: shadow rays through the BVH; vsm: variance shadow
-    /// maps for the light, with the scene's [visibility] settings).
+    /// maps for the light; approx: those and VPLs with imperfect shadow maps between reflectors
+    /// and receivers; settings in the scene's [visibility]).
     #[arg(long, value_enum, default_value_t = Visibility::Exact)]
     pub visibility: Visibility,
     /// Where sg selects cuts (default: the scene's methods.sg.cut).

@@ -3,5 +3,7 @@
 //! - [`tree`]: the PCA-split binary tree over the reflector triangles, with per-node shading
 //!   data (centroid, average normal, colour, area, material) and bounds (box, normal cone,
 //!   colour range).
+//! - [`vpl`]: virtual point lights on the lit reflectors, sampled by reflected flux.
 
 pub mod tree;
+pub mod vpl;

@@ -27,4 +27,8 @@ pub enum Visibility {
     /// Variance shadow maps for the light's visibility (direct light and the light on every
     /// reflector piece), shadow rays between reflectors and receivers as in `exact`.
     Vsm,
+    /// Experimental, not yet accurate (docs/visibility.md): the paper's visibility — variance
+    /// shadow maps for the light, and between reflectors and receivers virtual point lights
+    /// with imperfect shadow maps (each cut node interpolates the maps of its 3 nearest VPLs).
+    Approx,
 }

@@ -149,6 +149,9 @@ pub struct RenderSettings {
     pub sg: SgSpec,
     /// Variance shadow maps (`[visibility]`).
     pub vsm: crate::visibility::vsm::VsmOptions,
+    /// Virtual point lights per light and their imperfect shadow maps (`[visibility]`).
+    pub vpl_count: u32,
+    pub ism: crate::visibility::ism::IsmOptions,
 }
 
 /// A loaded, validated scene.
@@ -413,6 +416,24 @@ impl Builder {
                 format!("must be in [0, 1), got {}", v.light_bleeding),
             ));
         }
+        for (field, value, lo, hi) in [
+            ("visibility.vpl_count", v.vpl_count, 1, 100_000),
+            ("visibility.ism_resolution", v.ism_resolution, 4, 1024),
+            ("visibility.ism_points", v.ism_points, 1, 10_000_000),
+        ] {
+            if !(lo..=hi).contains(&value) {
+                return Err(self.err(field, format!("must be between {lo} and {hi}, got {value}")));
+            }
+        }
+        if !(v.ism_bias.is_finite() && (0.0..=10.0).contains(&v.ism_bias)) {
+            return Err(self.err(
+                "visibility.ism_bias",
+                format!(
+                    "must be between 0 and 10 (a fraction of the distance), got {}",
+                    v.ism_bias
+                ),
+            ));
+        }
         Ok(Scene {
             name,
             path: self.path.clone(),
@@ -430,6 +451,13 @@ impl Builder {
                     resolution: v.shadow_map_resolution,
                     blur: v.vsm_blur,
                     light_bleeding: v.light_bleeding,
+                },
+                vpl_count: v.vpl_count,
+                ism: crate::visibility::ism::IsmOptions {
+                    resolution: v.ism_resolution,
+                    points_per_map: v.ism_points,
+                    bias: v.ism_bias,
+                    blur: true,
                 },
             },
             inputs,

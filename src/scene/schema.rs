@@ -40,6 +40,34 @@ pub struct VisibilitySpec {
     /// Light-bleeding reduction of the variance shadow maps, in [0, 1) (0 = none).
     #[serde(default = "default_light_bleeding")]
     pub light_bleeding: f32,
+    /// Virtual point lights per light (`--visibility approx`).
+    #[serde(default = "default_vpl_count")]
+    pub vpl_count: u32,
+    /// Texels per side of each imperfect shadow map.
+    #[serde(default = "default_ism_resolution")]
+    pub ism_resolution: u32,
+    /// Scene points splatted into each imperfect shadow map.
+    #[serde(default = "default_ism_points")]
+    pub ism_points: u32,
+    /// Depth bias of the imperfect shadow maps, a fraction of the distance.
+    #[serde(default = "default_ism_bias")]
+    pub ism_bias: f32,
+}
+
+fn default_vpl_count() -> u32 {
+    200
+}
+
+fn default_ism_resolution() -> u32 {
+    crate::visibility::ism::IsmOptions::default().resolution
+}
+
+fn default_ism_points() -> u32 {
+    crate::visibility::ism::IsmOptions::default().points_per_map
+}
+
+fn default_ism_bias() -> f32 {
+    crate::visibility::ism::IsmOptions::default().bias
 }
 
 fn default_shadow_map_resolution() -> u32 {
@@ -60,6 +88,10 @@ impl Default for VisibilitySpec {
             shadow_map_resolution: default_shadow_map_resolution(),
             vsm_blur: default_vsm_blur(),
             light_bleeding: default_light_bleeding(),
+            vpl_count: default_vpl_count(),
+            ism_resolution: default_ism_resolution(),
+            ism_points: default_ism_points(),
+            ism_bias: default_ism_bias(),
         }
     }
 }

@@ -19,9 +19,11 @@ use crate::cut::{
 };
 use crate::image::Image;
 use crate::precompute::tree::{self, ReflectorTree};
+use crate::precompute::vpl::{self, Vpl};
 use crate::render::Visibility;
 use crate::scene::{Light, Scene};
 use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
+use crate::visibility::ism::{ImperfectShadowMaps, nearest_vpl_weights_among};
 use crate::visibility::vsm::VarianceShadowMap;
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
@@ -65,8 +67,10 @@ pub struct SgOptions {
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct SgTimes {
     pub tree: f64,
-    /// Variance shadow maps (`--visibility vsm`; 0 otherwise).
+    /// Variance shadow maps (`--visibility vsm|approx`; 0 otherwise).
     pub shadow_maps: f64,
+    /// VPLs, their imperfect shadow maps and every node's 3 nearest (`--visibility approx`).
+    pub vpls: f64,
     pub lighting: f64,
     pub primary: f64,
     pub vertex_cuts: f64,
@@ -178,7 +182,7 @@ pub fn render_sg(
         .lights
         .iter()
         .map(|light| {
-            (opts.visibility == Visibility::Vsm).then(|| {
+            (opts.visibility != Visibility::Exact).then(|| {
                 VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
             })
         })
@@ -211,6 +215,39 @@ pub fn render_sg(
     };
     stats.seconds.lighting = t.elapsed().as_secs_f64();
 
+    // VPLs and their imperfect shadow maps (`--visibility approx`), per light.
+    let t = Instant::now();
+    let vpl_vis: Vec<Option<VplVisibility>> =
+        if opts.visibility == Visibility::Approx && !lits.is_empty() {
+            let sources = vpl::sources(scene);
+            scene
+                .lights
+                .iter()
+                .zip(&maps)
+                .enumerate()
+                .map(|(k, (light, map))| {
+                    let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
+                    let vpls = vpl::generate(
+                        &sources,
+                        light,
+                        scene.settings.vpl_count as usize,
+                        opts.seed ^ k as u64,
+                        &visible,
+                    );
+                    Some(VplVisibility::new(
+                        scene,
+                        &tree,
+                        &pieces,
+                        &vpls,
+                        opts.seed ^ k as u64,
+                    ))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+    stats.seconds.vpls = t.elapsed().as_secs_f64();
+
     let camera = scene.camera.with_resolution(opts.width, opts.height);
     let w = opts.width as usize;
     let n_px = w * opts.height as usize;
@@ -235,6 +272,7 @@ pub fn render_sg(
         eps,
         lits: &lits,
         maps: &maps,
+        vpl_vis: &vpl_vis,
         opts,
         brute,
         camera_pos: camera.position,
@@ -342,6 +380,75 @@ pub fn render_sg_quiet(scene: &Scene, accel: &Accel, opts: &SgOptions) -> (Image
     render_sg(scene, accel, opts, &p).expect("not cancelled")
 }
 
+/// VPL-based visibility between reflectors and receivers for one light: the VPLs' imperfect
+/// shadow maps and, per tree node, the interpolation weights of its 3 nearest VPLs (from the
+/// node's area-weighted centroid).
+struct VplVisibility {
+    ism: ImperfectShadowMaps,
+    weights: Vec<[(u32, f32); 3]>,
+    /// Tree node of each leaf position (`tri_order` index).
+    leaf_of: Vec<u32>,
+}
+
+impl VplVisibility {
+    fn new(
+        scene: &Scene,
+        tree: &ReflectorTree,
+        pieces: &[ReflectorPiece],
+        vpls: &[Vpl],
+        seed: u64,
+    ) -> VplVisibility {
+        let ism = ImperfectShadowMaps::build(
+            &scene.mesh.positions,
+            &scene.mesh.indices,
+            vpls,
+            &scene.settings.ism,
+            seed,
+        );
+        let weights = tree
+            .nodes
+            .par_iter()
+            .map(|n| {
+                // VPLs on the node's own object (that of its first piece), facing within 60° of
+                // the node's normal when its normals are coherent.
+                let object =
+                    object_of(scene, pieces[tree.tri_order[n.first as usize] as usize].tri);
+                let normal = (n.mean_normal.length() >= 0.5).then(|| n.mean_normal.normalize());
+                let accept = |v: &Vpl| {
+                    object_of(scene, v.tri) == object
+                        && normal.is_none_or(|m| v.normal.dot(m) >= 0.5)
+                };
+                nearest_vpl_weights_among(n.centroid, &accept, vpls)
+            })
+            .collect();
+        let mut leaf_of = vec![0u32; tree.tri_order.len()];
+        for (i, n) in tree.nodes.iter().enumerate() {
+            if n.is_leaf() {
+                leaf_of[n.first as usize] = i as u32;
+            }
+        }
+        VplVisibility {
+            ism,
+            weights,
+            leaf_of,
+        }
+    }
+
+    /// Visibility of tree node `node` from receiver point `x`.
+    fn node(&self, node: u32, x: Vec3) -> f32 {
+        self.ism.interpolated(&self.weights[node as usize], x)
+    }
+}
+
+/// Index of the object scene triangle `t` belongs to.
+fn object_of(scene: &Scene, t: u32) -> usize {
+    scene
+        .objects
+        .iter()
+        .position(|o| (o.first_tri..o.first_tri + o.tri_count).contains(&t))
+        .unwrap_or(usize::MAX)
+}
+
 /// How many levels below a cut node its visibility is sampled: 2^depth rays per non-leaf node.
 /// Measured on the dragon at 32×24 against sg-brute (`results/sg-cpu.md`): depth 0 (one ray,
 /// to the node's brightest triangle) 6.3 %, 1: 5.3 %, 2: 5.1 %, 3: 5.1 %, with shading taking
@@ -358,6 +465,8 @@ struct Ctx<'a> {
     lits: &'a [LitScene<'a>],
     /// Per light: its variance shadow map (`--visibility vsm`), or none (shadow rays).
     maps: &'a [Option<VarianceShadowMap>],
+    /// Per light: VPLs with imperfect shadow maps (`--visibility approx`; empty otherwise).
+    vpl_vis: &'a [Option<VplVisibility>],
     opts: &'a SgOptions,
     brute: bool,
     camera_pos: Vec3,
@@ -524,7 +633,7 @@ impl Ctx<'_> {
             tally.shading_points.fetch_add(1, Ordering::Relaxed);
             if self.brute {
                 let mut c = CutCounters::default();
-                for t in &lit.tris {
+                for (pos, t) in lit.tris.iter().enumerate() {
                     if t.sg.is_none() {
                         continue;
                     }
@@ -532,8 +641,14 @@ impl Ctx<'_> {
                     c.leaves += 1;
                     let v = t.shade(sp.p, &rx, &lit.receiver);
                     if v != Vec3::ZERO {
-                        let (f, r) = self.triangle_visibility(xo, t, k, &rx);
-                        rays += r;
+                        let f = match self.vpl_vis.get(k).and_then(Option::as_ref) {
+                            Some(vv) => vv.node(vv.leaf_of[pos], xo),
+                            None => {
+                                let (f, r) = self.triangle_visibility(xo, t, k, &rx);
+                                rays += r;
+                                f
+                            }
+                        };
                         l += v * f;
                     }
                 }
@@ -555,6 +670,10 @@ impl Ctx<'_> {
             }
             for e in scratch.iter() {
                 if e.value == Vec3::ZERO {
+                    continue;
+                }
+                if let Some(vv) = self.vpl_vis.get(k).and_then(Option::as_ref) {
+                    l += e.value * vv.node(e.node, xo);
                     continue;
                 }
                 let n = &lit.tree.nodes[e.node as usize];
