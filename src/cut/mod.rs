@@ -504,7 +504,7 @@ impl<'a> LitScene<'a> {
     pub(crate) fn bound_parts(&self, node: u32, x: Vec3, rx: &ReceiverLobes) -> [f32; 6] {
         let mut parts = [0.0; 6];
         let n = &self.tree.nodes[node as usize];
-        node_bound_parts(n, &self.nodes[node as usize], x, rx, &mut parts);
+        node_bound_parts(n, &self.nodes[node as usize], x, rx, Some(&mut parts));
         parts
     }
 
@@ -622,17 +622,18 @@ impl<'a> LitScene<'a> {
 /// re-aiming only sharpens), so over the node they are at most exp(λ_min (cos γ − 1)) with γ the
 /// smallest angle at x between the node's bounding sphere and the images' bounding sphere.
 fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
-    node_bound_parts(n, lit, x, rx, &mut [0.0; 6])
+    node_bound_parts(n, lit, x, rx, None)
 }
 
-/// [`node_bound`], with its factors written to `parts`: [luminance of the radiance bound,
-/// of hmax, cos_max / d², gap (radians, −1 when none), image radius angle, node half-angle].
+/// [`node_bound`], with its factors written to `parts` when given (diagnostics): [luminance of
+/// the radiance bound, of hmax, cos_max / d², gap (radians, −1 when none), image radius angle,
+/// node half-angle].
 fn node_bound_parts(
     n: &Node,
     lit: &LitNode,
     x: Vec3,
     rx: &ReceiverLobes,
-    parts: &mut [f32; 6],
+    mut parts: Option<&mut [f32; 6]>,
 ) -> Vec3 {
     let (lo, hi) = (n.bbox_min, n.bbox_max);
     // Entirely below the receiver's horizon: nothing arrives (the transport clips to it).
@@ -683,8 +684,10 @@ fn node_bound_parts(
             let ir = 0.5 * (lit.image_max - lit.image_min).length();
             let to_i = ic - x;
             let di = to_i.length();
-            parts[4] = (ir / di).min(1.0).asin();
-            parts[5] = half;
+            if let Some(p) = parts.as_deref_mut() {
+                p[4] = (ir / di).min(1.0).asin();
+                p[5] = half;
+            }
             (di > ir).then(|| (angle(dir, to_i / di) - half - (ir / di).asin()).max(0.0))
         }
         _ => None,
@@ -707,14 +710,14 @@ fn node_bound_parts(
         }
         _ => 1.0,
     };
-    *parts = [
-        luminance(radiance),
-        luminance(hmax),
-        cos_max / d2,
-        gap.unwrap_or(-1.0),
-        parts[4],
-        parts[5],
-    ];
+    if let Some(p) = parts {
+        p[..4].copy_from_slice(&[
+            luminance(radiance),
+            luminance(hmax),
+            cos_max / d2,
+            gap.unwrap_or(-1.0),
+        ]);
+    }
     // 1e-3: headroom for the rounding of the f32 sums and of the quadrature (≤ 5e-7 relative).
     radiance * hmax * (1.001 * cos_max / d2)
 }

@@ -13,6 +13,7 @@
 //! Φ = E(y) V(y) A_t / (N_g P_t) (W, RGB), N_g the object's share: Σ Φ ρ estimates the flux the
 //! reflectors reflect without bias (test `vpl_power_sums_to_the_incident_flux`).
 
+use crate::cut::luminance;
 use crate::math::Rng;
 use crate::math::sampling::{Distribution1D, uniform_triangle};
 use crate::scene::{Light, Scene};
@@ -61,10 +62,6 @@ pub fn sources(scene: &Scene) -> Vec<VplSource> {
             }
         })
         .collect()
-}
-
-fn luminance(c: Vec3) -> f32 {
-    crate::cut::luminance(c)
 }
 
 /// The lit side's unit normal of a triangle and the irradiance on it (cosine included) at `p`.

@@ -23,7 +23,7 @@
 use crate::math::sampling::{Distribution1D, uniform_triangle};
 use crate::math::{Frame, Rng};
 use crate::precompute::vpl::Vpl;
-use crate::visibility::vsm::{chebyshev_upper_bound, min_variance};
+use crate::visibility::vsm::{bilinear_moments, chebyshev_upper_bound, min_variance};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -149,25 +149,11 @@ impl ImperfectShadowMaps {
     /// distance (less the bias); 1 where no point reached the map.
     pub fn visibility(&self, i: usize, p: Vec3) -> f32 {
         let (y, frame) = &self.origins[i];
-        let v = p - *y;
-        let t = v.length();
-        if !(t > 0.0) {
+        let Some((u, w, t)) = paraboloid(*y, frame, p) else {
             return 0.0;
-        }
-        let d = frame.to_local(v / t);
-        if !(d.z > 0.0) {
-            return 0.0;
-        }
-        let (u, w) = (d.x / (1.0 + d.z), d.y / (1.0 + d.z));
+        };
         let n = self.res;
-        let x = ((u + 1.0) * 0.5 * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
-        let yy = ((w + 1.0) * 0.5 * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
-        let (x0, y0) = (x.floor() as usize, yy.floor() as usize);
-        let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
-        let (fx, fy) = (x - x0 as f32, yy - y0 as f32);
-        let map = &self.atlas[i * n * n..(i + 1) * n * n];
-        let row = |y: usize| map[y * n + x0] * (1.0 - fx) + map[y * n + x1] * fx;
-        let m = row(y0) * (1.0 - fy) + row(y1) * fy;
+        let m = bilinear_moments(&self.atlas[i * n * n..(i + 1) * n * n], n, u, w);
         if !(m.x > 0.0) {
             // No point reached this part of the map: nothing occludes.
             return 1.0;
@@ -181,9 +167,9 @@ impl ImperfectShadowMaps {
 /// in front of a wall a factor of several.
 const FRONT_LAYER: f32 = 0.5;
 
-/// Texel index and distance of point `p` in the paraboloid map of a VPL at `y`; `None` below
-/// its horizon or at the VPL itself.
-fn texel(res: usize, y: Vec3, frame: &Frame, p: Vec3) -> Option<(usize, f32)> {
+/// Paraboloid coordinates (u, v) in the unit disc and distance of point `p` seen from a VPL at
+/// `y` with normal frame `frame`; `None` below its horizon or at the VPL itself.
+fn paraboloid(y: Vec3, frame: &Frame, p: Vec3) -> Option<(f32, f32, f32)> {
     let v = p - y;
     let z = v.length();
     if !(z > 0.0) {
@@ -193,7 +179,12 @@ fn texel(res: usize, y: Vec3, frame: &Frame, p: Vec3) -> Option<(usize, f32)> {
     if !(d.z > 0.0) {
         return None;
     }
-    let (u, w) = (d.x / (1.0 + d.z), d.y / (1.0 + d.z));
+    Some((d.x / (1.0 + d.z), d.y / (1.0 + d.z), z))
+}
+
+/// Texel index and distance of point `p` in the paraboloid map of a VPL at `y`.
+fn texel(res: usize, y: Vec3, frame: &Frame, p: Vec3) -> Option<(usize, f32)> {
+    let (u, w, z) = paraboloid(y, frame, p)?;
     let i = (((u + 1.0) * 0.5 * res as f32) as usize).min(res - 1);
     let j = (((w + 1.0) * 0.5 * res as f32) as usize).min(res - 1);
     Some((j * res + i, z))
@@ -274,22 +265,22 @@ mod tests;
 pub fn nearest_vpl_weights(p: Vec3, normal: Option<Vec3>, vpls: &[Vpl]) -> [(u32, f32); 3] {
     nearest_vpl_weights_among(
         p,
-        &|v: &Vpl| normal.is_none_or(|n| v.normal.dot(n) >= 0.5),
+        &|_, v: &Vpl| normal.is_none_or(|n| v.normal.dot(n) >= 0.5),
         vpls,
     )
 }
 
-/// [`nearest_vpl_weights`] among the VPLs `accept` admits, when there are 3 such (all VPLs
-/// otherwise).
+/// [`nearest_vpl_weights`] among the VPLs `accept(index, vpl)` admits, when there are 3 such
+/// (all VPLs otherwise).
 pub fn nearest_vpl_weights_among(
     p: Vec3,
-    accept: &dyn Fn(&Vpl) -> bool,
+    accept: &dyn Fn(usize, &Vpl) -> bool,
     vpls: &[Vpl],
 ) -> [(u32, f32); 3] {
-    let nearest = |filter: &dyn Fn(&Vpl) -> bool| {
+    let nearest = |filter: &dyn Fn(usize, &Vpl) -> bool| {
         let mut best = [(u32::MAX, f32::INFINITY); 3];
         for (i, v) in vpls.iter().enumerate() {
-            if !filter(v) {
+            if !filter(i, v) {
                 continue;
             }
             let d = (v.position - p).length_squared();
@@ -302,7 +293,7 @@ pub fn nearest_vpl_weights_among(
     };
     let mut best = nearest(accept);
     if best[2].0 == u32::MAX {
-        best = nearest(&|_| true);
+        best = nearest(&|_, _| true);
     }
     let found = best.iter().filter(|b| b.0 != u32::MAX).count();
     let inverse_distance = |best: &[(u32, f32); 3]| {

@@ -275,17 +275,27 @@ impl VarianceShadowMap {
     /// face's texels cover with a margin (`margin_scale`), so that lookups never clamp.
     fn bilinear(&self, face: usize, u: f32, v: f32) -> Vec2 {
         let n = self.res as usize;
-        let max = (n - 1) as f32;
         let s = self.margin;
-        let x = ((u / s + 1.0) * 0.5 * self.res as f32 - 0.5).clamp(0.0, max);
-        let y = ((v / s + 1.0) * 0.5 * self.res as f32 - 0.5).clamp(0.0, max);
-        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-        let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
-        let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-        let m = &self.moments[face * n * n..(face + 1) * n * n];
-        let row = |y: usize| m[y * n + x0] * (1.0 - fx) + m[y * n + x1] * fx;
-        row(y0) * (1.0 - fy) + row(y1) * fy
+        bilinear_moments(
+            &self.moments[face * n * n..(face + 1) * n * n],
+            n,
+            u / s,
+            v / s,
+        )
     }
+}
+
+/// Bilinear interpolation of an n × n map of moments whose texels cover [−1, 1]² (texel
+/// centres at (2i + 1)/n − 1), at (u, v), clamped to the outermost texel centres.
+pub(crate) fn bilinear_moments(m: &[Vec2], n: usize, u: f32, v: f32) -> Vec2 {
+    let max = (n - 1) as f32;
+    let x = ((u + 1.0) * 0.5 * n as f32 - 0.5).clamp(0.0, max);
+    let y = ((v + 1.0) * 0.5 * n as f32 - 0.5).clamp(0.0, max);
+    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
+    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    let row = |y: usize| m[y * n + x0] * (1.0 - fx) + m[y * n + x1] * fx;
+    row(y0) * (1.0 - fy) + row(y1) * fy
 }
 
 /// The faces' texels span [−s, s]² of face coordinates, s = 1 + 2(blur + 2)/res: blur + 2

@@ -405,18 +405,18 @@ impl VplVisibility {
             &scene.settings.ism,
             seed,
         );
+        let object_of = |t: u32| scene.mesh.tri_object[t as usize];
+        let vpl_objects: Vec<u32> = vpls.iter().map(|v| object_of(v.tri)).collect();
         let weights = tree
             .nodes
             .par_iter()
             .map(|n| {
                 // VPLs on the node's own object (that of its first piece), facing within 60° of
                 // the node's normal when its normals are coherent.
-                let object =
-                    object_of(scene, pieces[tree.tri_order[n.first as usize] as usize].tri);
+                let object = object_of(pieces[tree.tri_order[n.first as usize] as usize].tri);
                 let normal = (n.mean_normal.length() >= 0.5).then(|| n.mean_normal.normalize());
-                let accept = |v: &Vpl| {
-                    object_of(scene, v.tri) == object
-                        && normal.is_none_or(|m| v.normal.dot(m) >= 0.5)
+                let accept = |i: usize, v: &Vpl| {
+                    vpl_objects[i] == object && normal.is_none_or(|m| v.normal.dot(m) >= 0.5)
                 };
                 nearest_vpl_weights_among(n.centroid, &accept, vpls)
             })
@@ -438,15 +438,6 @@ impl VplVisibility {
     fn node(&self, node: u32, x: Vec3) -> f32 {
         self.ism.interpolated(&self.weights[node as usize], x)
     }
-}
-
-/// Index of the object scene triangle `t` belongs to.
-fn object_of(scene: &Scene, t: u32) -> usize {
-    scene
-        .objects
-        .iter()
-        .position(|o| (o.first_tri..o.first_tri + o.tri_count).contains(&t))
-        .unwrap_or(usize::MAX)
 }
 
 /// How many levels below a cut node its visibility is sampled: 2^depth rays per non-leaf node.
@@ -473,6 +464,16 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
+    /// Light `k`'s variance shadow map, if its visibility comes from one.
+    fn map(&self, k: usize) -> Option<&VarianceShadowMap> {
+        self.maps.get(k).and_then(Option::as_ref)
+    }
+
+    /// Light `k`'s VPLs with imperfect shadow maps, under `--visibility approx`.
+    fn vpl_vis(&self, k: usize) -> Option<&VplVisibility> {
+        self.vpl_vis.get(k).and_then(Option::as_ref)
+    }
+
     /// Is the segment from the receiver (offset point `xo`) to `target` on a reflector free?
     fn visible(&self, xo: Vec3, target: Vec3) -> bool {
         let d = target - xo;
@@ -540,7 +541,7 @@ impl Ctx<'_> {
         rx: &ReceiverLobes,
     ) -> (f32, u64) {
         let light = &self.scene.lights[k_light];
-        let map = self.maps.get(k_light).and_then(Option::as_ref);
+        let map = self.map(k_light);
         let [a, b, c] = t.vertices;
         let mut rays = 0;
         let weight = |p: Vec3| -> f32 {
@@ -612,7 +613,7 @@ impl Ctx<'_> {
         let mut l = Vec3::ZERO;
         if self.opts.direct {
             for (k, light) in self.scene.lights.iter().enumerate() {
-                l += match self.maps.get(k).and_then(Option::as_ref) {
+                l += match self.map(k) {
                     None => reflected_light(self.accel, brdf, &sp, wo, light, self.eps),
                     Some(m) => reflected_light_with(brdf, &sp, wo, light, |inc| {
                         m.lit(sp.offset(self.eps) + inc.wi * self.eps)
@@ -641,7 +642,7 @@ impl Ctx<'_> {
                     c.leaves += 1;
                     let v = t.shade(sp.p, &rx, &lit.receiver);
                     if v != Vec3::ZERO {
-                        let f = match self.vpl_vis.get(k).and_then(Option::as_ref) {
+                        let f = match self.vpl_vis(k) {
                             Some(vv) => vv.node(vv.leaf_of[pos], xo),
                             None => {
                                 let (f, r) = self.triangle_visibility(xo, t, k, &rx);
@@ -672,7 +673,7 @@ impl Ctx<'_> {
                 if e.value == Vec3::ZERO {
                     continue;
                 }
-                if let Some(vv) = self.vpl_vis.get(k).and_then(Option::as_ref) {
+                if let Some(vv) = self.vpl_vis(k) {
                     l += e.value * vv.node(e.node, xo);
                     continue;
                 }

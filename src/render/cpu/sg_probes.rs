@@ -6,6 +6,81 @@
 use super::*;
 use crate::transport::brute_force::{Config, one_bounce_exact_shaded};
 
+/// What both probes set up: the scene's reflector pieces and tree at `w` pixels wide, with
+/// exact visibility, for its first light.
+struct Setup {
+    scene: Scene,
+    accel: Accel,
+    eps: f32,
+    opts: SgOptions,
+    pieces: Vec<ReflectorPiece>,
+    tree: ReflectorTree,
+}
+
+impl Setup {
+    fn new(scene: Scene, w: u32, brute: bool, cut: CutOptions) -> Setup {
+        let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+        let eps = ray_epsilon(&scene);
+        let h = (w as f32 * scene.camera.height as f32 / scene.camera.width as f32).round() as u32;
+        let opts = SgOptions {
+            width: w,
+            height: h,
+            spp: 1,
+            seed: 0,
+            direct: false,
+            indirect: true,
+            brute,
+            cut,
+            mode: CutMode::Pixel,
+            max_edge: scene.mesh.diagonal() / 128.0,
+            visibility: crate::render::Visibility::Exact,
+        };
+        let pieces = reflector_pieces(&scene, opts.max_edge);
+        let tree = build_tree(&scene, &pieces);
+        Setup {
+            scene,
+            accel,
+            eps,
+            opts,
+            pieces,
+            tree,
+        }
+    }
+
+    /// The first light's lit reflector pieces.
+    fn lit(&self) -> LitScene<'_> {
+        let s = &self.scene;
+        light_scene(
+            s,
+            &self.accel,
+            &self.pieces,
+            &self.tree,
+            &s.lights[0],
+            None,
+            self.eps,
+            ReceiverOptions::default(),
+        )
+    }
+
+    fn ctx<'a>(&'a self, lits: &'a [LitScene<'a>]) -> Ctx<'a> {
+        Ctx {
+            scene: &self.scene,
+            accel: &self.accel,
+            eps: self.eps,
+            lits,
+            maps: &[],
+            vpl_vis: &[],
+            opts: &self.opts,
+            brute: self.opts.brute,
+            camera_pos: self
+                .scene
+                .camera
+                .with_resolution(self.opts.width, self.opts.height)
+                .position,
+        }
+    }
+}
+
 /// Diagnostic for the transport at one pixel: at the centre of pixel (PROBE_X, PROBE_Y) of
 /// the scene PROBE_SCENE rendered 64 px wide (first light, a point light), every lit
 /// reflector piece's SG transport (what `sg-brute` sums) against its exact integral with
@@ -20,25 +95,9 @@ fn pixel_probe() {
     let scene = Scene::load(std::path::Path::new(&var("PROBE_SCENE"))).expect("scene");
     let px: f32 = var("PROBE_X").parse().expect("PROBE_X");
     let py: f32 = var("PROBE_Y").parse().expect("PROBE_Y");
-    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-    let eps = ray_epsilon(&scene);
     let w = 64;
-    let h = (w as f32 * scene.camera.height as f32 / scene.camera.width as f32).round() as u32;
-    let opts = SgOptions {
-        width: w,
-        height: h,
-        spp: 1,
-        seed: 0,
-        direct: false,
-        indirect: true,
-        brute: true,
-        cut: CutOptions::default(),
-        mode: CutMode::Pixel,
-        max_edge: scene.mesh.diagonal() / 128.0,
-        visibility: crate::render::Visibility::Exact,
-    };
-    let pieces = reflector_pieces(&scene, opts.max_edge);
-    let tree = build_tree(&scene, &pieces);
+    let su = Setup::new(scene, w, true, CutOptions::default());
+    let (scene, accel, eps, pieces, tree) = (&su.scene, &su.accel, su.eps, &su.pieces, &su.tree);
     let light = &scene.lights[0];
     let Light::Point {
         position,
@@ -47,16 +106,9 @@ fn pixel_probe() {
     else {
         panic!("the probe handles point lights");
     };
-    let lits = [light_scene(
-        &scene,
-        &accel,
-        &pieces,
-        &tree,
-        light,
-        None,
-        eps,
-        ReceiverOptions::default(),
-    )];
+    let lits = [su.lit()];
+    let ctx = su.ctx(&lits);
+    let h = su.opts.height;
     let camera = scene.camera.with_resolution(w, h);
     let hit = accel
         .intersect(
@@ -66,20 +118,9 @@ fn pixel_probe() {
             f32::INFINITY,
         )
         .expect("the pixel sees the scene");
-    let ctx = Ctx {
-        scene: &scene,
-        accel: &accel,
-        eps,
-        lits: &lits,
-        maps: &[None],
-        vpl_vis: &[],
-        opts: &opts,
-        brute: true,
-        camera_pos: camera.position,
-    };
     let lit = &lits[0];
     let wo = (camera.position - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
-    let sp = SurfacePoint::from_hit(&scene, &hit, wo).expect("a surface point");
+    let sp = SurfacePoint::from_hit(scene, &hit, wo).expect("a surface point");
     let brdf = scene.tri_material(hit.tri);
     let rx = ReceiverLobes::new(brdf, sp.frame.n, wo);
     let xo = sp.offset(eps);
@@ -201,51 +242,17 @@ fn cut_probe() {
             var("PROBE_Y").parse::<u32>().expect("PROBE_Y"),
         )
     });
-    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-    let eps = ray_epsilon(&scene);
-    let h = (w as f32 * scene.camera.height as f32 / scene.camera.width as f32).round() as u32;
-    let opts = SgOptions {
-        width: w,
-        height: h,
-        spp: 1,
-        seed: 0,
-        direct: false,
-        indirect: true,
-        brute: false,
-        cut: CutOptions {
-            max_cut,
-            ..CutOptions::default()
-        },
-        mode: CutMode::Pixel,
-        max_edge: scene.mesh.diagonal() / 128.0,
-        visibility: crate::render::Visibility::Exact,
+    let cut = CutOptions {
+        max_cut,
+        ..CutOptions::default()
     };
-    let pieces = reflector_pieces(&scene, opts.max_edge);
-    let tree = build_tree(&scene, &pieces);
-    let light = &scene.lights[0];
-    let lits = [light_scene(
-        &scene,
-        &accel,
-        &pieces,
-        &tree,
-        light,
-        None,
-        eps,
-        ReceiverOptions::default(),
-    )];
+    let su = Setup::new(scene, w, false, cut);
+    let (scene, accel, eps, opts) = (&su.scene, &su.accel, su.eps, &su.opts);
+    let h = opts.height;
+    let lits = [su.lit()];
     let lit = &lits[0];
     let camera = scene.camera.with_resolution(w, h);
-    let ctx = Ctx {
-        scene: &scene,
-        accel: &accel,
-        eps,
-        lits: &lits,
-        maps: &[None],
-        vpl_vis: &[],
-        opts: &opts,
-        brute: false,
-        camera_pos: camera.position,
-    };
+    let ctx = su.ctx(&lits);
     let lum = |v: Vec3| f64::from(v.x + v.y + v.z) / 3.0;
     // Per pixel: [brute no vis, cut no vis, brute vis, cut vis, cut with ideal node vis].
     // Σ |value − leaves| and Σ (value − leaves) (no visibility) of internal cut nodes, and
@@ -268,7 +275,7 @@ fn cut_probe() {
                 return [0.0; 5];
             }
             let wo = (camera.position - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
-            let Some(sp) = SurfacePoint::from_hit(&scene, &hit, wo) else {
+            let Some(sp) = SurfacePoint::from_hit(scene, &hit, wo) else {
                 return [0.0; 5];
             };
             let rx = ReceiverLobes::new(scene.tri_material(hit.tri), sp.frame.n, wo);
