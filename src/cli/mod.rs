@@ -12,7 +12,9 @@ mod compare;
 mod fit;
 mod info;
 mod progress;
+mod prt;
 mod render;
+mod sh_irradiance;
 mod single_triangle;
 
 use clap::{Parser, Subcommand};
@@ -47,6 +49,9 @@ pub enum Command {
     ConvertMesh { input: PathBuf, output: PathBuf },
     /// Fit spherical Gaussians to every BRDF model: lobes, relative L2 errors, report and plots.
     Fit(fit::FitArgs),
+    /// Irradiance of an environment map from its SH projection next to brute force, per order
+    /// (a table, and images: environment | brute force | SH | relative error).
+    ShIrradiance(sh_irradiance::ShIrradianceArgs),
 }
 
 /// Writes `text` to standard output; a closed pipe (`interreflect info ... | head`) is not an
@@ -72,5 +77,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Fit(a) => fit::run(a),
+        Command::ShIrradiance(a) => sh_irradiance::run(a),
     }
 }

@@ -10,7 +10,8 @@ use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
 use interreflect::render::cpu::{RenderOptions, render};
-use interreflect::render::{Method, Visibility};
+use interreflect::precompute::prt::TransferKind;
+use interreflect::render::{Device, Method, Visibility};
 use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -69,6 +70,28 @@ pub struct RenderArgs {
     /// No progress bar and no log lines (errors and warnings still go to stderr).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Where passes that have a GPU version run (so far: prt's relighting).
+    #[arg(long, value_enum, default_value_t = Device::Auto)]
+    pub device: Device,
+    /// prt: SH order, bands l < order (default: methods.prt.order).
+    #[arg(long)]
+    pub order: Option<u32>,
+    /// prt: what the transfer includes (default: methods.prt.transfer).
+    #[arg(long, value_enum)]
+    pub transfer: Option<TransferKind>,
+    /// prt: reflections of the interreflected transfer (default: methods.prt.bounces).
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// prt: rotate the SH lighting about the up (+y) axis by this many degrees, without
+    /// recomputing the transfer.
+    #[arg(long, allow_hyphen_values = true)]
+    pub rotate_lighting: Option<f32>,
+    /// prt: directory of the transfer cache.
+    #[arg(long, default_value = "results/cache/prt")]
+    pub prt_cache: PathBuf,
+    /// prt: neither read nor write the transfer cache.
+    #[arg(long)]
+    pub no_cache: bool,
 }
 
 /// The JSON log written beside the image.
@@ -90,6 +113,8 @@ struct RenderLog<'a> {
     reference: Option<ReferenceLog>,
     #[serde(skip_serializing_if = "Option::is_none")]
     sg: Option<SgLog>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    prt: Option<super::prt::PrtLog>,
 }
 
 /// Reference-renderer fields of the log.
@@ -196,10 +221,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("warning: {w}");
     }
     let is_sg = matches!(args.method, Method::Sg | Method::SgBrute);
-    let spp = args.spp.unwrap_or(if is_sg {
-        scene.settings.sg.spp
-    } else {
-        scene.settings.spp
+    let spp = args.spp.unwrap_or(match args.method {
+        Method::Sg | Method::SgBrute => scene.settings.sg.spp,
+        Method::Prt => scene.settings.prt.spp,
+        _ => scene.settings.spp,
     });
     if spp == 0 || spp > MAX_SPP {
         bail!("--spp must be between 1 and {MAX_SPP}, got {spp}");
@@ -269,7 +294,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         bail!("--max-edge must be a length ≥ 0 (0 = never split), got {max_edge}");
     }
     let t = Instant::now();
-    let rendered = if is_sg {
+    let rendered = if args.method == Method::Prt {
+        let Some((img, prt_log)) = super::prt::render(&args, &scene, &accel, &pool, (width, height), spp, seed)?
+        else {
+            return Ok(interrupted());
+        };
+        (img, None, None, Some(prt_log), 0)
+    } else if is_sg {
         let opts = SgOptions {
             width,
             height,
@@ -320,6 +351,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
                 max_edge,
                 stats,
             }),
+            None,
             nonfinite,
         )
     } else {
@@ -355,10 +387,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
                 nonfinite_samples: stats.nonfinite_samples,
             }),
             None,
+            None,
             stats.nonfinite_samples,
         )
     };
-    let (img, reference_log, sg_log, nonfinite) = rendered;
+    let (img, reference_log, sg_log, prt_log, nonfinite) = rendered;
     times.render = t.elapsed().as_secs_f64();
     if nonfinite > 0 {
         eprintln!("warning: {nonfinite} samples were not finite and were dropped");
@@ -390,6 +423,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         seconds: times,
         reference: reference_log,
         sg: sg_log,
+        prt: prt_log,
     };
     let text = serde_json::to_string_pretty(&log_data)? + "\n";
     interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes())

@@ -4,6 +4,8 @@
 //!   data (centroid, average normal, colour, area, material) and bounds (box, normal cone,
 //!   colour range).
 //! - [`vpl`]: virtual point lights on the lit reflectors, sampled by reflected flux.
+//! - [`prt`]: SH diffuse precomputed radiance transfer per vertex (the comparison method).
 
+pub mod prt;
 pub mod tree;
 pub mod vpl;

@@ -2,6 +2,7 @@
 
 pub mod checks;
 pub mod cpu;
+pub mod gpu;
 
 /// The rendering methods of `interreflect render --method`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -15,6 +16,21 @@ pub enum Method {
     Sg,
     /// The SG method over every reflector triangle (no tree): the cut's own yardstick.
     SgBrute,
+    /// SH diffuse precomputed radiance transfer under distant lighting (environment maps and
+    /// directional lights): the low-frequency comparison method.
+    Prt,
+}
+
+/// Where the stages that have a GPU pass run (`render --device`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Device {
+    /// The GPU when an adapter exists, otherwise the CPU (with a one-line notice).
+    Auto,
+    /// The GPU; an error when no adapter exists.
+    Gpu,
+    /// The CPU twins of the GPU passes.
+    Cpu,
 }
 
 /// Visibility between reflectors and receivers (and from the light to reflectors) for `sg`.

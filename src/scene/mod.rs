@@ -28,6 +28,11 @@ pub const MAX_SPP: u32 = 1 << 20;
 /// size holds 6 × 4096² × 8 bytes = 805 MB).
 pub const MAX_SHADOW_MAP: u32 = 4096;
 
+/// Largest accepted `methods.prt.bounces`.
+pub const MAX_PRT_BOUNCES: u32 = 8;
+/// Largest accepted `methods.prt.samples` (ray directions per vertex).
+pub const MAX_PRT_SAMPLES: u32 = 1 << 16;
+
 /// Largest accepted `methods.sg.max_cut`.
 pub const MAX_CUT: u32 = 1 << 24;
 
@@ -152,6 +157,8 @@ pub struct RenderSettings {
     /// Virtual point lights per light and their imperfect shadow maps (`[visibility]`).
     pub vpl_count: u32,
     pub ism: crate::visibility::ism::IsmOptions,
+    /// SH diffuse PRT (`[methods.prt]`).
+    pub prt: PrtSpec,
 }
 
 /// A loaded, validated scene.
@@ -394,6 +401,46 @@ impl Builder {
                 format!("must be between 1 and {MAX_SPP}, got {}", sg.spp),
             ));
         }
+        let p = file.methods.prt;
+        if !(1..=crate::math::sh::MAX_ORDER).contains(&p.order) {
+            return Err(self.err(
+                "methods.prt.order",
+                format!(
+                    "must be between 1 and {}, got {}",
+                    crate::math::sh::MAX_ORDER,
+                    p.order
+                ),
+            ));
+        }
+        if p.bounces > MAX_PRT_BOUNCES {
+            return Err(self.err(
+                "methods.prt.bounces",
+                format!("must be between 0 and {MAX_PRT_BOUNCES}, got {}", p.bounces),
+            ));
+        }
+        if !(1..=MAX_PRT_SAMPLES).contains(&p.samples) {
+            return Err(self.err(
+                "methods.prt.samples",
+                format!("must be between 1 and {MAX_PRT_SAMPLES}, got {}", p.samples),
+            ));
+        }
+        if let Some(w) = p.window_width
+            && !(w.is_finite() && w > 0.0 && w <= 4.0 * crate::math::sh::MAX_ORDER as f32)
+        {
+            return Err(self.err(
+                "methods.prt.window_width",
+                format!(
+                    "must be a band number > 0 and at most {}, got {w}",
+                    4 * crate::math::sh::MAX_ORDER
+                ),
+            ));
+        }
+        if p.spp == 0 || p.spp > MAX_SPP {
+            return Err(self.err(
+                "methods.prt.spp",
+                format!("must be between 1 and {MAX_SPP}, got {}", p.spp),
+            ));
+        }
         let v = file.visibility;
         if !(16..=MAX_SHADOW_MAP).contains(&v.shadow_map_resolution) {
             return Err(self.err(
@@ -459,6 +506,7 @@ impl Builder {
                     bias: v.ism_bias,
                     blur: true,
                 },
+                prt: p,
             },
             inputs,
             warnings: self.warnings,

@@ -287,6 +287,66 @@ pub struct MethodsSpec {
     pub reference: ReferenceSpec,
     #[serde(default)]
     pub sg: SgSpec,
+    #[serde(default)]
+    pub prt: PrtSpec,
+}
+
+/// Settings of SH diffuse precomputed radiance transfer (`prt`).
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PrtSpec {
+    /// SH order: bands l < order, order² coefficients per vertex and channel.
+    #[serde(default = "default_prt_order")]
+    pub order: u32,
+    /// What the transfer includes: "unshadowed", "shadowed" or "interreflected".
+    #[serde(default = "default_prt_transfer")]
+    pub transfer: crate::precompute::prt::TransferKind,
+    /// Reflections added to the shadowed transfer when `transfer = "interreflected"`.
+    #[serde(default = "one")]
+    pub bounces: u32,
+    /// Ray directions per vertex (cosine-distributed, stratified).
+    #[serde(default = "default_prt_samples")]
+    pub samples: u32,
+    /// Window applied to the SH lighting against ringing: "none", "hanning" or "lanczos".
+    #[serde(default = "default_prt_window")]
+    pub window: crate::precompute::prt::WindowKind,
+    /// Band at which the window reaches 0 (Hanning) or its first zero (Lanczos); absent =
+    /// the order.
+    #[serde(default)]
+    pub window_width: Option<f32>,
+    /// Samples per pixel of the final interpolation pass.
+    #[serde(default = "one")]
+    pub spp: u32,
+}
+
+fn default_prt_order() -> u32 {
+    5
+}
+
+fn default_prt_transfer() -> crate::precompute::prt::TransferKind {
+    crate::precompute::prt::TransferKind::Interreflected
+}
+
+fn default_prt_samples() -> u32 {
+    1024
+}
+
+fn default_prt_window() -> crate::precompute::prt::WindowKind {
+    crate::precompute::prt::WindowKind::Hanning
+}
+
+impl Default for PrtSpec {
+    fn default() -> Self {
+        PrtSpec {
+            order: default_prt_order(),
+            transfer: default_prt_transfer(),
+            bounces: 1,
+            samples: default_prt_samples(),
+            window: default_prt_window(),
+            window_width: None,
+            spp: 1,
+        }
+    }
 }
 
 /// Settings of the SG method (`sg`, `sg-brute`).

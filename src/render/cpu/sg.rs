@@ -127,7 +127,7 @@ impl Tally {
 }
 
 /// Sub-pixel position of sample `s` of `spp` in pixel `pixel`.
-fn sample_offset(spp: u32, s: u32, seed: u64, pixel: u64) -> Vec2 {
+pub(crate) fn sample_offset(spp: u32, s: u32, seed: u64, pixel: u64) -> Vec2 {
     if spp == 1 {
         return Vec2::splat(0.5);
     }

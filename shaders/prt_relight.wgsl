@@ -1,0 +1,39 @@
+// PRT relighting: one dot product per vertex and colour channel.
+//
+// radiance[v].c = Σ_i transfer[v][i].c · lighting[i].c, over the n = order² SH coefficients.
+// Rust twin: `precompute::prt::relight_cpu` (and `render::gpu::prt::relight`, which dispatches
+// this shader over chunks of vertices so that no binding exceeds the device's limit).
+// Layouts (plain f32 arrays, no vec3 padding):
+//   transfer: [vertex][coefficient][rgb]   lighting: [coefficient][rgb]   radiance: [vertex][rgb]
+
+struct Params {
+    vertex_count: u32,
+    coefficients: u32,
+    // Invocations per row of the dispatch grid (workgroups in x × 64).
+    row_stride: u32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> transfer: array<f32>;
+@group(0) @binding(2) var<storage, read> lighting: array<f32>;
+@group(0) @binding(3) var<storage, read_write> radiance: array<f32>;
+
+@compute @workgroup_size(64)
+fn prt_relight(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let v = gid.y * params.row_stride + gid.x;
+    if (v >= params.vertex_count) {
+        return;
+    }
+    let n = params.coefficients;
+    var sum = vec3<f32>(0.0);
+    let base = v * n * 3u;
+    for (var i = 0u; i < n; i = i + 1u) {
+        let t = vec3<f32>(transfer[base + 3u * i], transfer[base + 3u * i + 1u], transfer[base + 3u * i + 2u]);
+        let l = vec3<f32>(lighting[3u * i], lighting[3u * i + 1u], lighting[3u * i + 2u]);
+        sum = sum + t * l;
+    }
+    radiance[3u * v] = sum.x;
+    radiance[3u * v + 1u] = sum.y;
+    radiance[3u * v + 2u] = sum.z;
+}

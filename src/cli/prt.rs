@@ -1,0 +1,214 @@
+//! `interreflect render --method prt`: transfer (cached), SH lighting, relighting on the GPU or
+//! the CPU, and the image pass.
+
+use super::progress;
+use super::render::RenderArgs;
+use anyhow::bail;
+use glam::{Mat3, Vec3};
+use interreflect::accel::Accel;
+use interreflect::image::Image;
+use interreflect::math::sh;
+use interreflect::precompute::prt::{
+    CacheStatus, PrtOptions, TransferKind, WindowKind, load_or_compute, relight_cpu, sh_lighting,
+    work_units,
+};
+use interreflect::render::Device;
+use interreflect::render::cpu::prt::{PrtImageOptions, render_prt_image};
+use interreflect::render::gpu::{Gpu, prt::relight};
+use interreflect::scene::{MAX_PRT_BOUNCES, Scene};
+use serde::Serialize;
+use std::time::Instant;
+
+/// PRT fields of the render log.
+#[derive(Serialize)]
+pub struct PrtLog {
+    order: u32,
+    coefficients: usize,
+    transfer: TransferKind,
+    bounces: u32,
+    samples: u32,
+    window: WindowKind,
+    window_width: f32,
+    lighting_rotation_deg: f32,
+    vertices: usize,
+    transfer_megabytes: f64,
+    /// "hit", "stored" or "off".
+    cache: &'static str,
+    /// "gpu" or "cpu": where the relighting ran.
+    relight_device: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    adapter: Option<String>,
+    seconds: PrtTimings,
+}
+
+#[derive(Serialize, Default)]
+struct PrtTimings {
+    /// Transfer: computed, or read from the cache.
+    transfer: f64,
+    /// SH projection of the lighting (and its rotation).
+    lighting: f64,
+    /// One dot product per vertex and channel (both transfer parts).
+    relight: f64,
+    /// Interpolating vertex radiance into pixels.
+    image: f64,
+}
+
+/// Renders `scene` with PRT; `None` when interrupted.
+pub fn render(
+    args: &RenderArgs,
+    scene: &Scene,
+    accel: &Accel,
+    pool: &rayon::ThreadPool,
+    (width, height): (u32, u32),
+    spp: u32,
+    seed: u64,
+) -> anyhow::Result<Option<(Image, PrtLog)>> {
+    let ps = scene.settings.prt;
+    let order = args.order.unwrap_or(ps.order);
+    if !(1..=sh::MAX_ORDER).contains(&order) {
+        bail!("--order must be between 1 and {}, got {order}", sh::MAX_ORDER);
+    }
+    let bounces = args.bounces.unwrap_or(ps.bounces);
+    if bounces > MAX_PRT_BOUNCES {
+        bail!("--bounces must be between 0 and {MAX_PRT_BOUNCES}, got {bounces}");
+    }
+    let opts = PrtOptions {
+        order,
+        kind: args.transfer.unwrap_or(ps.transfer),
+        bounces,
+        samples: ps.samples,
+        seed,
+    };
+    if args.indirect_only && opts.effective_bounces() == 0 {
+        bail!(
+            "--indirect-only with prt needs the interreflected transfer with at least one bounce (--transfer interreflected --bounces 1)"
+        );
+    }
+    let rotation = args.rotate_lighting.unwrap_or(0.0);
+    if !rotation.is_finite() {
+        bail!("--rotate-lighting must be a finite angle in degrees, got {rotation}");
+    }
+    let say = |s: String| {
+        if !args.quiet {
+            eprintln!("{s}");
+        }
+    };
+    let mut secs = PrtTimings::default();
+
+    let t = Instant::now();
+    let cache_dir = (!args.no_cache).then_some(args.prt_cache.as_path());
+    let result = progress::run(work_units(scene, &opts), args.quiet, |prog| {
+        pool.install(|| load_or_compute(scene, accel, &opts, cache_dir, prog))
+    });
+    let Some((transfer, status)) = result else {
+        return Ok(None);
+    };
+    secs.transfer = t.elapsed().as_secs_f64();
+    let cache = match &status {
+        CacheStatus::Hit(p) => {
+            say(format!("prt: transfer read from {}", p.display()));
+            "hit"
+        }
+        CacheStatus::Stored(p) => {
+            say(format!(
+                "prt: transfer computed in {:.2} s, cached in {}",
+                secs.transfer,
+                p.display()
+            ));
+            "stored"
+        }
+        CacheStatus::Uncached(reason) => {
+            if let Some(r) = reason {
+                eprintln!("warning: prt: the transfer cache is not used: {r}");
+            }
+            "off"
+        }
+    };
+
+    let t = Instant::now();
+    let width_w = ps.window_width.unwrap_or(order as f32);
+    let (mut lighting, warnings) = sh_lighting(scene, order, ps.window.window(width_w));
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    if rotation != 0.0 {
+        let r = sh::ShRotation::new(order, Mat3::from_rotation_y(rotation.to_radians()));
+        lighting = r.apply(&lighting);
+    }
+    secs.lighting = t.elapsed().as_secs_f64();
+
+    let n = transfer.coefficients();
+    let parts: Vec<&[Vec3]> = if args.indirect_only {
+        vec![&transfer.bounce]
+    } else if transfer.bounce.is_empty() {
+        vec![&transfer.direct]
+    } else {
+        vec![&transfer.direct, &transfer.bounce]
+    };
+    let gpu = match args.device {
+        Device::Cpu => None,
+        Device::Gpu => Some(Gpu::new()?),
+        Device::Auto => match Gpu::new() {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("notice: relighting on the CPU: {e}");
+                None
+            }
+        },
+    };
+    let t = Instant::now();
+    let mut radiance = vec![Vec3::ZERO; transfer.vertices];
+    for part in parts {
+        let r = match &gpu {
+            Some(g) => relight(g, part, n, &lighting)?,
+            None => pool.install(|| relight_cpu(part, n, &lighting)),
+        };
+        for (a, b) in radiance.iter_mut().zip(r) {
+            *a += b;
+        }
+    }
+    secs.relight = t.elapsed().as_secs_f64();
+    say(format!(
+        "prt: order {order} ({n} coefficients), {:?} transfer, {} bounce(s), {} vertices ({:.1} MB); relit on the {} in {:.3} s",
+        opts.kind,
+        opts.effective_bounces(),
+        transfer.vertices,
+        transfer.bytes() as f64 / 1e6,
+        gpu.as_ref().map_or("CPU".to_string(), |g| format!("GPU ({})", g.adapter)),
+        secs.relight
+    ));
+
+    let t = Instant::now();
+    let image_opts = PrtImageOptions {
+        width,
+        height,
+        spp,
+        seed,
+    };
+    let img = progress::run(height as u64, args.quiet, |prog| {
+        pool.install(|| render_prt_image(scene, accel, &radiance, &image_opts, prog))
+    });
+    let Some(img) = img else {
+        return Ok(None);
+    };
+    secs.image = t.elapsed().as_secs_f64();
+    Ok(Some((
+        img,
+        PrtLog {
+            order,
+            coefficients: n,
+            transfer: opts.kind,
+            bounces: opts.effective_bounces(),
+            samples: opts.samples,
+            window: ps.window,
+            window_width: width_w,
+            lighting_rotation_deg: rotation,
+            vertices: transfer.vertices,
+            transfer_megabytes: transfer.bytes() as f64 / 1e6,
+            cache,
+            relight_device: if gpu.is_some() { "gpu" } else { "cpu" },
+            adapter: gpu.map(|g| g.adapter),
+            seconds: secs,
+        },
+    )))
+}

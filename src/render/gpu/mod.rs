@@ -1,0 +1,151 @@
+//! The GPU path (wgpu; on machines without a GPU, Mesa's lavapipe). This is the only module
+//! that imports wgpu. Each pass has one WGSL file under `shaders/` named after it and a Rust twin
+//! of the same name on the CPU, which the GPU tests compare it with.
+//!
+//! Passes so far: [`prt::relight`] (`shaders/prt_relight.wgsl`).
+
+pub mod prt;
+
+use std::sync::{Arc, Mutex};
+
+/// Why the GPU path could not run.
+#[derive(thiserror::Error, Debug)]
+pub enum GpuError {
+    #[error(
+        "no GPU adapter found ({0}); on a machine without a GPU install the software Vulkan driver (scripts/install-deps.sh installs mesa-vulkan-drivers), or render with --device cpu"
+    )]
+    NoAdapter(String),
+    #[error("cannot open the GPU device of adapter \"{adapter}\": {reason}")]
+    Device { adapter: String, reason: String },
+    #[error("GPU {what}: {reason}")]
+    Failed { what: String, reason: String },
+}
+
+/// An open device and its queue.
+pub struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    /// Adapter name and backend, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
+    pub adapter: String,
+    /// Largest storage-buffer binding, in bytes (128 MiB on lavapipe).
+    pub max_binding: u64,
+    /// Errors the device reported outside an error scope (validation, out of memory).
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+impl Gpu {
+    /// Opens the first adapter wgpu finds (high-performance preference), with that adapter's
+    /// own limits. A missing adapter is an error, never a panic.
+    pub fn new() -> Result<Gpu, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let name = format!("{} ({:?})", info.name, info.backend);
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("interreflect"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: name.clone(),
+            reason: e.to_string(),
+        })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        Ok(Gpu {
+            device,
+            queue,
+            adapter: name,
+            max_binding: limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size),
+            uncaptured,
+        })
+    }
+
+    /// Fails with the first error the device reported outside an error scope, if any.
+    fn check(&self, what: &str) -> Result<(), GpuError> {
+        let first = self
+            .uncaptured
+            .lock()
+            .ok()
+            .and_then(|mut v| (!v.is_empty()).then(|| v.remove(0)));
+        match first {
+            Some(reason) => Err(GpuError::Failed {
+                what: what.into(),
+                reason,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Waits for all submitted work.
+    fn wait(&self, what: &str) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Failed {
+                what: what.into(),
+                reason: e.to_string(),
+            })?;
+        Ok(())
+    }
+
+    /// Copies `bytes` bytes of a GPU buffer back to the CPU.
+    fn read_back(&self, src: &wgpu::Buffer, bytes: u64, what: &str) -> Result<Vec<u8>, GpuError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read back"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes);
+        self.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait(what)?;
+        let failed = |reason: String| GpuError::Failed {
+            what: what.into(),
+            reason,
+        };
+        rx.recv()
+            .map_err(|e| failed(e.to_string()))?
+            .map_err(|e| failed(e.to_string()))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| failed(e.to_string()))?
+            .to_vec();
+        staging.unmap();
+        Ok(data)
+    }
+}
+
+/// Whether the environment asks GPU tests to fail rather than skip when no adapter exists
+/// (`CI=true`).
+pub fn adapter_required() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+}

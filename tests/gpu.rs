@@ -1,0 +1,76 @@
+//! GPU passes against their CPU twins, on whatever adapter wgpu finds (lavapipe on machines
+//! without a GPU). With `CI=true` a missing adapter fails these tests instead of skipping them.
+
+use glam::Vec3;
+use interreflect::math::Rng;
+use interreflect::precompute::prt::relight_cpu;
+use interreflect::render::gpu::{Gpu, adapter_required, prt::relight};
+
+fn gpu() -> Option<Gpu> {
+    match Gpu::new() {
+        Ok(g) => Some(g),
+        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
+        Err(e) => {
+            eprintln!("skipped (no GPU adapter): {e}");
+            None
+        }
+    }
+}
+
+fn random_table(vertices: usize, coefficients: usize, seed: u64) -> (Vec<Vec3>, Vec<Vec3>) {
+    let mut rng = Rng::keyed(seed, 0, 0);
+    let mut v = || Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0;
+    let transfer = (0..vertices * coefficients).map(|_| v()).collect();
+    let lighting = (0..coefficients).map(|_| v()).collect();
+    (transfer, lighting)
+}
+
+/// Both sides sum the same f32 products in the same order; they differ only where the GPU
+/// fuses a multiply-add, by at most a few ulps of the sum of magnitudes per term: 1e-5 of
+/// Σ|t·l| leaves a factor of ~10 over 64 terms.
+fn assert_close(gpu: &[Vec3], cpu: &[Vec3], transfer: &[Vec3], lighting: &[Vec3]) {
+    assert_eq!(gpu.len(), cpu.len());
+    let n = lighting.len();
+    for (v, (g, c)) in gpu.iter().zip(cpu).enumerate() {
+        let scale: Vec3 = transfer[v * n..(v + 1) * n]
+            .iter()
+            .zip(lighting)
+            .map(|(t, l)| (*t * *l).abs())
+            .sum();
+        let tol = scale * 1e-5 + Vec3::splat(1e-30);
+        assert!(
+            (*g - *c).abs().cmple(tol).all(),
+            "vertex {v}: gpu {g} cpu {c} (tolerance {tol})"
+        );
+    }
+}
+
+#[test]
+fn prt_relight_matches_its_cpu_twin() {
+    let Some(g) = gpu() else { return };
+    for (order, vertices) in [(1usize, 7usize), (3, 1000), (8, 5003)] {
+        let n = order * order;
+        let (transfer, lighting) = random_table(vertices, n, order as u64);
+        let on_gpu = relight(&g, &transfer, n, &lighting).expect("relight on the GPU");
+        let on_cpu = relight_cpu(&transfer, n, &lighting);
+        assert_close(&on_gpu, &on_cpu, &transfer, &lighting);
+    }
+}
+
+#[test]
+fn prt_relight_splits_work_over_the_binding_limit() {
+    let Some(mut g) = gpu() else { return };
+    // 1000 vertices per chunk: 4321 vertices take 5 dispatches, the last one partial.
+    g.max_binding = 1000 * 64 * 12;
+    let (transfer, lighting) = random_table(4321, 64, 9);
+    let on_gpu = relight(&g, &transfer, 64, &lighting).expect("relight on the GPU");
+    assert_close(&on_gpu, &relight_cpu(&transfer, 64, &lighting), &transfer, &lighting);
+}
+
+#[test]
+fn prt_relight_rejects_inconsistent_sizes() {
+    let Some(g) = gpu() else { return };
+    let (transfer, lighting) = random_table(10, 9, 1);
+    let err = relight(&g, &transfer[..85], 9, &lighting).unwrap_err();
+    assert!(err.to_string().contains("inconsistent sizes"), "{err}");
+}
