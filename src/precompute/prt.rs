@@ -461,11 +461,12 @@ impl Fnv {
 }
 
 /// Hash of everything the transfer depends on: geometry, normals, materials' albedos, the
-/// objects' reflector/receiver flags and the options.
+/// objects' reflector/receiver flags and the options — except the order: the SH basis is nested,
+/// so a transfer of order n holds every lower order's coefficients (the same estimates), and one
+/// cache file serves them all.
 pub fn cache_key(scene: &Scene, opts: &PrtOptions) -> u64 {
     let mut h = Fnv::new();
     h.bytes(CACHE_VERSION);
-    h.u64(opts.order as u64);
     h.u64(opts.kind as u64);
     h.u64(opts.effective_bounces() as u64);
     h.u64(opts.samples as u64);
@@ -488,12 +489,7 @@ pub fn cache_key(scene: &Scene, opts: &PrtOptions) -> u64 {
 
 /// The cache file of a scene and options under `dir`.
 pub fn cache_path(dir: &Path, scene: &Scene, opts: &PrtOptions) -> PathBuf {
-    dir.join(format!(
-        "{}-o{}-{:016x}.prt",
-        scene.name,
-        opts.order,
-        cache_key(scene, opts)
-    ))
+    dir.join(format!("{}-{:016x}.prt", scene.name, cache_key(scene, opts)))
 }
 
 fn encode(t: &Transfer) -> Vec<u8> {
@@ -519,10 +515,14 @@ fn decode(b: &[u8], order: u32, vertices: usize, bounce: bool) -> Option<Transfe
     let file_order = rd32(8);
     let file_vertices = u64::from_le_bytes(b[12..20].try_into().unwrap()) as usize;
     let file_bounce = rd32(20) != 0;
-    if file_order != order || file_vertices != vertices || file_bounce != bounce {
+    if file_order < order
+        || file_order > sh::MAX_ORDER
+        || file_vertices != vertices
+        || file_bounce != bounce
+    {
         return None;
     }
-    let n = sh::sh_count(order) * vertices;
+    let n = sh::sh_count(file_order) * vertices;
     let arrays = if bounce { 2 } else { 1 };
     if b.len() != head + arrays * n * 12 {
         return None;
@@ -539,16 +539,24 @@ fn decode(b: &[u8], order: u32, vertices: usize, bounce: bool) -> Option<Transfe
         .map(|c| Vec3::new(c[0], c[1], c[2]))
         .collect();
     let (direct, rest) = vecs.split_at(n);
+    // Keep the first order² coefficients of each vertex.
+    let (stored, kept) = (sh::sh_count(file_order), sh::sh_count(order));
+    let truncate = |v: &[Vec3]| -> Vec<Vec3> {
+        v.chunks(stored)
+            .flat_map(|c| c[..kept].iter().copied())
+            .collect()
+    };
     Some(Transfer {
         order,
         vertices,
-        direct: direct.to_vec(),
-        bounce: rest.to_vec(),
+        direct: truncate(direct),
+        bounce: truncate(rest),
     })
 }
 
-/// The transfer from the cache under `cache_dir` when a valid file for exactly this scene and
-/// these options exists, otherwise computed (with `progress`) and written there atomically.
+/// The transfer from the cache under `cache_dir` when a valid file for this scene and these
+/// options exists at this order or a higher one (truncated), otherwise computed (with
+/// `progress`) and written there atomically.
 /// A cache that cannot be read or written is never an error: the transfer is computed.
 /// `None` when cancelled.
 pub fn load_or_compute(

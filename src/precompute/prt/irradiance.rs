@@ -18,7 +18,7 @@ pub fn directions(env: &Environment, width: u32, height: u32) -> Vec<Vec3> {
     }
     let grid = Environment::from_image(
         Image::from_fn(width, height, |_, _| Vec3::ONE),
-        env.rotation_degrees(),
+        env.rotation_deg(),
         1.0,
     )
     .expect("a constant map of positive size is valid");

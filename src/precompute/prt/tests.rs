@@ -194,6 +194,11 @@ fn the_cache_returns_the_same_transfer_and_rejects_other_settings() {
     let (b, sb) = quiet(|p| load_or_compute(&scene, &accel, &o, Some(dir.path()), p)).unwrap();
     assert!(matches!(sb, CacheStatus::Hit(_)), "{sb:?}");
     assert_eq!(a, b);
+    // A lower order is served from the same file, truncated: the basis is nested.
+    let low = PrtOptions { order: 2, ..o };
+    let (d, sd) = quiet(|p| load_or_compute(&scene, &accel, &low, Some(dir.path()), p)).unwrap();
+    assert!(matches!(sd, CacheStatus::Hit(_)), "{sd:?}");
+    assert_eq!(d, transfer(&scene, &low));
     // Other settings, or other materials, make another key.
     let o2 = PrtOptions { samples: 256, ..o };
     assert_ne!(cache_key(&scene, &o), cache_key(&scene, &o2));
