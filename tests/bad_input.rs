@@ -470,3 +470,137 @@ fn bad_sg_settings_are_named() {
         assert_rejected(&c, &s, &["scene.toml", field]);
     }
 }
+
+/// A valid 8 × 4 environment map `env.exr` in the case's directory.
+fn env_map(c: &Case) {
+    use glam::Vec3;
+    use interreflect::image::{Image, write_exr};
+    let img = Image::from_fn(8, 4, |x, y| {
+        Vec3::new(0.5 + x as f32 * 0.1, 0.5, 0.2 * y as f32)
+    });
+    write_exr(&c.dir.path().join("env.exr"), &img).unwrap();
+}
+
+fn env_scene(c: &Case, table: &str) -> PathBuf {
+    scene_with(c, &format!("{GOOD_HEAD}{PLANE}\n[environment]\n{table}\n"))
+}
+
+#[test]
+fn bad_environment_settings_are_named() {
+    for (table, needles) in [
+        (
+            "file = \"envmaps/missing.exr\"",
+            &["scene.toml", "environment.file", "missing.exr"][..],
+        ),
+        (
+            "file = \"broken.exr\"",
+            &["scene.toml", "environment.file", "broken.exr"],
+        ),
+        (
+            "file = \"broken.hdr\"",
+            &["scene.toml", "environment.file", "broken.hdr", "Radiance"],
+        ),
+        (
+            "file = \"env.exr\"\nintensity = -1.0",
+            &["scene.toml", "environment.intensity", "≥ 0"],
+        ),
+        (
+            "file = \"env.exr\"\nrotation = nan",
+            &["scene.toml", "environment.rotation", "finite"],
+        ),
+        (
+            "file = \"env.exr\"\nrotaton = 90.0",
+            &["scene.toml", "rotaton"],
+        ),
+        ("rotation = 10.0", &["scene.toml", "file"]),
+        (
+            "file = \"negative.exr\"",
+            &["scene.toml", "environment.file", "negative.exr", "negative"],
+        ),
+        (
+            "file = \"env.png\"",
+            &["scene.toml", "environment.file", "env.png", "extension"],
+        ),
+    ] {
+        let c = Case::new();
+        env_map(&c);
+        c.file("broken.exr", b"\x76\x2f\x31\x01 this is not an EXR");
+        c.file(
+            "broken.hdr",
+            b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4 +X 8\n\x02\x02",
+        );
+        c.file("env.png", b"\x89PNG");
+        interreflect::image::write_exr(
+            &c.dir.path().join("negative.exr"),
+            &interreflect::image::Image::from_fn(8, 4, |x, _| {
+                glam::Vec3::splat(if x == 3 { -0.5 } else { 1.0 })
+            }),
+        )
+        .unwrap();
+        let s = env_scene(&c, table);
+        assert_rejected(&c, &s, needles);
+    }
+}
+
+#[test]
+fn environment_needs_brdf_samples() {
+    let c = Case::new();
+    env_map(&c);
+    let s = scene_with(
+        &c,
+        &format!(
+            "{GOOD_HEAD}{PLANE}\n[environment]\nfile = \"env.exr\"\n[methods.reference]\nbsdf_samples = 0\n"
+        ),
+    );
+    assert_rejected(&c, &s, &["scene.toml", "methods.reference.bsdf_samples"]);
+}
+
+#[test]
+fn environment_renders_and_warns_where_it_should() {
+    // A valid map renders (status 0), and is protected from being overwritten by an output.
+    let c = Case::new();
+    env_map(&c);
+    let s = env_scene(&c, "file = \"env.exr\"\nrotation = 30.0\nintensity = 2.0");
+    let o = c.render(&s);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    let o = Command::new(env!("CARGO_BIN_EXE_interreflect"))
+        .arg("render")
+        .arg(&s)
+        .args(["--quiet", "--spp", "1", "--output"])
+        .arg(c.dir.path().join("env.exr"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("refusing to overwrite"),
+        "{}",
+        stderr(&o)
+    );
+    // A map that is not 2:1 renders with a warning.
+    let c = Case::new();
+    interreflect::image::write_exr(
+        &c.dir.path().join("square.exr"),
+        &interreflect::image::Image::from_fn(4, 4, |_, _| glam::Vec3::ONE),
+    )
+    .unwrap();
+    let s = env_scene(&c, "file = \"square.exr\"");
+    assert_warned(&c, &s, &["environment.file", "square.exr", "2:1"]);
+    // sg ignores the environment: a warning says so.
+    let c = Case::new();
+    env_map(&c);
+    let s = env_scene(&c, "file = \"env.exr\"");
+    let o = Command::new(env!("CARGO_BIN_EXE_interreflect"))
+        .arg("render")
+        .arg(&s)
+        .args(["--quiet", "--method", "sg", "--output"])
+        .arg(c.out())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning") && err.contains("sg ignores environment lighting"),
+        "{err}"
+    );
+}

@@ -97,6 +97,19 @@ pub fn run(path: &Path) -> anyhow::Result<i32> {
             ),
         }
     }
+    if let Some(e) = &scene.environment {
+        outln!(
+            out,
+            "environment: {}x{} lat-long map ({}), rotation {}° about +y, ∫ luminance dω = {:.4} (intensity applied)",
+            e.width(),
+            e.height(),
+            e.path()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
+            e.rotation_deg(),
+            e.integrated_luminance()
+        );
+    }
     outln!(out, "materials:");
     for m in &scene.materials {
         outln!(out, "  {:<12} {:?}", m.name, m.brdf);

@@ -9,6 +9,7 @@ macro_rules! outln {
 }
 
 mod compare;
+mod envmap;
 mod fit;
 mod info;
 mod progress;
@@ -47,6 +48,9 @@ pub enum Command {
     },
     /// Convert a mesh (PLY, PLY.gz, OBJ, glTF/GLB) to the compact binary PLY.gz used in scenes/.
     ConvertMesh { input: PathBuf, output: PathBuf },
+    /// Resample a lat-long environment map (EXR or Radiance HDR) to a compact EXR of a given
+    /// width, by an area-weighted box filter that preserves ∫ L dω.
+    ConvertEnvmap(envmap::ConvertEnvmapArgs),
     /// Fit spherical Gaussians to every BRDF model: lobes, relative L2 errors, report and plots.
     Fit(fit::FitArgs),
     /// Irradiance of an environment map from its SH projection next to brute force, per order
@@ -78,5 +82,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         }
         Command::Fit(a) => fit::run(a),
         Command::ShIrradiance(a) => sh_irradiance::run(a),
+        Command::ConvertEnvmap(a) => envmap::run(a),
     }
 }

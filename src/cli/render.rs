@@ -221,6 +221,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("warning: {w}");
     }
     let is_sg = matches!(args.method, Method::Sg | Method::SgBrute);
+    if is_sg && scene.environment.is_some() {
+        eprintln!(
+            "warning: {}: environment: --method {} ignores environment lighting (reference, direct and prt render it); the image shows the delta lights only",
+            scene.path.display(),
+            if args.method == Method::Sg {
+                "sg"
+            } else {
+                "sg-brute"
+            }
+        );
+    }
     let spp = args.spp.unwrap_or(match args.method {
         Method::Sg | Method::SgBrute => scene.settings.sg.spp,
         Method::Prt => scene.settings.prt.spp,
@@ -248,11 +259,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         }
     };
     log(format!(
-        "scene {}: {} triangles in {} objects, {} lights; {:?}{} {}x{} at {} spp, seed {}, {} threads",
+        "scene {}: {} triangles in {} objects, {} lights{}; {:?}{} {}x{} at {} spp, seed {}, {} threads",
         scene.name,
         scene.mesh.indices.len(),
         scene.objects.len(),
         scene.lights.len(),
+        scene
+            .environment
+            .as_ref()
+            .map(|e| format!(", a {}x{} environment map", e.width(), e.height()))
+            .unwrap_or_default(),
         args.method,
         if args.indirect_only {
             " (indirect only)"

@@ -17,6 +17,9 @@ pub enum ImageError {
     /// The bytes are not a valid (or not a supported) OpenEXR file: garbage, truncated, ...
     #[error("{:?} is not a readable OpenEXR file: {reason}", .path)]
     ExrDecode { path: PathBuf, reason: String },
+    /// The bytes are not a valid (or not a supported) Radiance RGBE file.
+    #[error("{:?} is not a readable Radiance HDR file: {reason}", .path)]
+    HdrDecode { path: PathBuf, reason: String },
     /// No layer of the EXR file has all of the R, G and B channels.
     #[error(
         "{:?}: no layer of the OpenEXR file has all of the channels R, G and B (channels found: {found})",

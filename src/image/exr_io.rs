@@ -92,6 +92,97 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
     Ok(img)
 }
 
+/// Width and height of the layer [`read_exr`] would read, from the header alone (so a caller can
+/// refuse an absurd size before decoding).
+pub fn read_exr_size(path: &Path) -> Result<(u32, u32), ImageError> {
+    let file = std::fs::File::open(path).map_err(|source| ImageError::Read {
+        path: path.to_path_buf(),
+        format: "EXR",
+        source,
+    })?;
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(file), true)
+        .map_err(|e| ImageError::ExrDecode {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+    let has = |h: &exr::meta::header::Header, n: &str| h.channels.list.iter().any(|c| c.name.eq(n));
+    let h = meta
+        .headers
+        .iter()
+        .find(|h| has(h, "R") && has(h, "G") && has(h, "B"))
+        .or(meta.headers.first())
+        .ok_or_else(|| ImageError::ExrDecode {
+            path: path.to_path_buf(),
+            reason: "no layers".into(),
+        })?;
+    let size = h.layer_size;
+    Ok((
+        u32::try_from(size.width()).unwrap_or(u32::MAX),
+        u32::try_from(size.height()).unwrap_or(u32::MAX),
+    ))
+}
+
+/// Largest finite half-float value: [`write_exr_half`] refuses pixels above it.
+pub const HALF_MAX: f32 = 65504.0;
+
+/// Writes `img` like [`write_exr`] but with 16-bit half-float channels (about 3 significant
+/// digits, relative precision 2⁻¹¹) and PIZ compression: half the size or less, for data that
+/// does not need f32 (environment maps). Refuses pixels that are not finite or exceed
+/// [`HALF_MAX`] ([`ImageError::InvalidImage`]).
+pub fn write_exr_half(path: &Path, img: &Image) -> Result<(), ImageError> {
+    super::check_writable(path, img.width, img.height, img.data.len())?;
+    if let Some((px, py, v)) = img.first_non_finite() {
+        return Err(ImageError::non_finite(path, px, py, v));
+    }
+    if let Some(i) = img
+        .data
+        .iter()
+        .position(|p| p.abs().max_element() > HALF_MAX)
+    {
+        return Err(ImageError::InvalidImage {
+            path: path.to_path_buf(),
+            reason: format!(
+                "pixel (x {}, y {}) = {} exceeds the half-float range (±{HALF_MAX})",
+                i % img.width as usize,
+                i / img.width as usize,
+                img.data[i]
+            ),
+        });
+    }
+    let w = img.width as usize;
+    let data = &img.data;
+    let channels = x::SpecificChannels::rgb(|pos: x::Vec2<usize>| {
+        let p = data[pos.y() * w + pos.x()];
+        (
+            x::f16::from_f32(p.x),
+            x::f16::from_f32(p.y),
+            x::f16::from_f32(p.z),
+        )
+    });
+    let exr_image = x::Image::from_encoded_channels(
+        (w, img.height as usize),
+        x::Encoding {
+            compression: x::Compression::PIZ,
+            blocks: x::Blocks::ScanLines,
+            line_order: x::LineOrder::Increasing,
+        },
+        channels,
+    );
+    let mut bytes = Vec::new();
+    exr_image
+        .write()
+        .to_buffered(Cursor::new(&mut bytes))
+        .map_err(|e| ImageError::Encode {
+            path: path.to_path_buf(),
+            format: "OpenEXR",
+            reason: e.to_string(),
+        })?;
+    write_bytes_atomic(path, &bytes).map_err(|source| ImageError::Write {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 /// Writes `img` as a single-layer OpenEXR file: channels R, G, B as 32-bit float (linear, no
 /// alpha), ZIP compression in blocks of 16 scan lines (lossless), increasing line order.
 /// The file is written atomically (temporary file + rename).

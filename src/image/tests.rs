@@ -463,3 +463,28 @@ fn image_helpers() {
         Some((1, 1))
     );
 }
+
+/// Half-float EXR (PIZ): reads back within half precision; out-of-range pixels are refused.
+#[test]
+fn half_exr_round_trips_within_half_precision() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("h.exr");
+    let img = Image::from_fn(33, 17, |x, y| {
+        Vec3::new(
+            x as f32 * 0.37,
+            y as f32 * 100.0 + 0.01,
+            60000.0 / (1.0 + x as f32),
+        )
+    });
+    write_exr_half(&p, &img).unwrap();
+    let back = read_exr(&p).unwrap();
+    assert_eq!((back.width, back.height), (33, 17));
+    for (a, b) in img.data.iter().zip(&back.data) {
+        // Half floats: 11 significant bits, relative error ≤ 2⁻¹¹ (plus subnormal spacing).
+        let excess = (*a - *b).abs() - a.abs() / 2048.0;
+        assert!(excess.max_element() <= 1e-6, "{a} read back as {b}");
+    }
+    let too_big = Image::from_fn(2, 1, |x, _| Vec3::splat(if x == 1 { 7e4 } else { 1.0 }));
+    let e = write_exr_half(&p, &too_big).unwrap_err().to_string();
+    assert!(e.contains("half") && e.contains("x 1"), "{e}");
+}

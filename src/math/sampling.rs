@@ -229,6 +229,22 @@ impl Distribution1D {
         }
         Some(i)
     }
+
+    /// [`sample`](Self::sample), also returning where `u` fell inside the chosen entry's share of
+    /// [0, 1), rescaled to [0, 1): a fresh uniform number for a second, nested choice (pbrt's
+    /// "sample reuse"). Its precision is that of `u` less the bits the choice used.
+    pub fn sample_remapped(&self, u: f32) -> Option<(usize, f32)> {
+        let i = self.sample(u)?;
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let w = self.cdf[i] - lo;
+        let r = if w > 0.0 {
+            ((u as f64 * self.total - lo) / w).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        // The largest f32 below 1 (1 − 2⁻²⁴), so the result stays in [0, 1).
+        Some((i, (r as f32).min(f32::from_bits(0x3f7f_ffff))))
+    }
 }
 
 #[cfg(test)]

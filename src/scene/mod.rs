@@ -4,12 +4,14 @@
 //! into one [`SceneMesh`], with a per-triangle object index.
 
 pub mod camera;
+pub mod environment;
 pub mod light;
 pub mod mesh;
 pub mod schema;
 pub mod shapes;
 
 pub use camera::Camera;
+pub use environment::Environment;
 pub use light::{Incident, Light};
 
 use crate::brdf::{Brdf, Distribution};
@@ -169,11 +171,14 @@ pub struct Scene {
     pub path: PathBuf,
     pub camera: Camera,
     pub lights: Vec<Light>,
+    /// Environment lighting (`[environment]`), if any. The reference, direct and prt methods
+    /// render it.
+    pub environment: Option<Environment>,
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,
     pub mesh: SceneMesh,
     pub settings: RenderSettings,
-    /// Mesh files the scene reads (so outputs never overwrite them).
+    /// Mesh and environment-map files the scene reads (so outputs never overwrite them).
     pub inputs: Vec<PathBuf>,
     /// Problems that do not stop rendering (repaired normals, removed triangles, ...).
     pub warnings: Vec<String>,
@@ -289,9 +294,15 @@ impl Builder {
             .enumerate()
             .map(|(i, l)| self.light(i, l))
             .collect::<Result<Vec<_>, _>>()?;
-        if lights.is_empty() {
-            self.warnings
-                .push("no lights: every method will render a black image".into());
+        let mut inputs = Vec::new();
+        let environment = match &file.environment {
+            Some(spec) => Some(self.environment(spec, &mut inputs)?),
+            None => None,
+        };
+        if lights.is_empty() && environment.is_none() {
+            self.warnings.push(
+                "no lights and no [environment]: every method will render a black image".into(),
+            );
         }
         let mut materials = Vec::new();
         for (mname, spec) in &file.materials {
@@ -308,7 +319,6 @@ impl Builder {
         }
         let mut mesh = SceneMesh::default();
         let mut objects = Vec::new();
-        let mut inputs = Vec::new();
         for (i, o) in file.objects.iter().enumerate() {
             let field = format!("objects[{i}]");
             let oname = o.name.clone().unwrap_or_else(|| format!("object{i}"));
@@ -361,6 +371,12 @@ impl Builder {
             if v > 64 {
                 return Err(self.err(f, format!("must be between 0 and 64, got {v}")));
             }
+        }
+        if environment.is_some() && r.bsdf_samples == 0 {
+            return Err(self.err(
+                "methods.reference.bsdf_samples",
+                "must be at least 1 in a scene with an [environment]: BRDF sampling at the receiver is the only strategy that finds the one-bounce light of the environment",
+            ));
         }
         if r.reflector_samples == 0 && r.bsdf_samples == 0 && r.light_paths == 0 {
             return Err(self.err(
@@ -486,6 +502,7 @@ impl Builder {
             path: self.path.clone(),
             camera,
             lights,
+            environment,
             materials,
             objects,
             mesh,
@@ -536,6 +553,53 @@ impl Builder {
         }
         Camera::look_at(pos, at, up, c.fov_y, c.width, c.height)
             .ok_or_else(|| self.err("camera.up", "is parallel to the viewing direction"))
+    }
+
+    fn environment(
+        &mut self,
+        spec: &EnvironmentSpec,
+        inputs: &mut Vec<PathBuf>,
+    ) -> Result<Environment, SceneError> {
+        if !spec.rotation.is_finite() {
+            return Err(self.err(
+                "environment.rotation",
+                format!("must be a finite angle in degrees, got {}", spec.rotation),
+            ));
+        }
+        if !(spec.intensity.is_finite() && spec.intensity >= 0.0) {
+            return Err(self.err(
+                "environment.intensity",
+                format!("must be a finite number ≥ 0, got {}", spec.intensity),
+            ));
+        }
+        if spec.file.trim().is_empty() {
+            return Err(self.err("environment.file", "must name a .exr or .hdr file"));
+        }
+        let p = self.dir.join(&spec.file);
+        let env = Environment::load(&p, spec.rotation, spec.intensity)
+            .map_err(|e| self.err("environment.file", e.to_string()))?;
+        let (w, h) = (env.width(), env.height());
+        if w != 2 * h {
+            self.warnings.push(format!(
+                "{}: environment.file: {} is {w}x{h}, not 2:1 — lat-long maps are twice as wide as high; it is stretched over the sphere as is",
+                self.path.display(),
+                spec.file
+            ));
+        }
+        if env.is_black() {
+            self.warnings.push(format!(
+                "{}: environment: {} is black{}: it lights nothing",
+                self.path.display(),
+                spec.file,
+                if spec.intensity == 0.0 {
+                    " (intensity = 0)"
+                } else {
+                    ""
+                }
+            ));
+        }
+        inputs.push(p);
+        Ok(env)
     }
 
     fn light(&self, i: usize, l: &LightSpec) -> Result<Light, SceneError> {

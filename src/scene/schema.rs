@@ -25,6 +25,27 @@ pub struct SceneFile {
     pub methods: MethodsSpec,
     #[serde(default)]
     pub visibility: VisibilitySpec,
+    /// Environment lighting (a lat-long map at infinity).
+    #[serde(default)]
+    pub environment: Option<EnvironmentSpec>,
+}
+
+/// `[environment]`: a lat-long radiance map lighting the scene from infinity.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentSpec {
+    /// The map, relative to the scene file: `.exr` or `.hdr`.
+    pub file: String,
+    /// Degrees about +y (right-handed), default 0.
+    #[serde(default)]
+    pub rotation: f32,
+    /// Scale of the map's radiance, default 1.
+    #[serde(default = "unit_intensity")]
+    pub intensity: f32,
+}
+
+fn unit_intensity() -> f32 {
+    1.0
 }
 
 /// Settings of the approximate visibility (`render --visibility vsm`).

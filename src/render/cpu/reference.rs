@@ -9,12 +9,19 @@
 //! 3. light tracing: pick y as in 2, sample the reflected direction from f_y, trace to x and
 //!    connect x to the camera, splatting into the pixel that sees x.
 //!
+//! An environment map (`[environment]`) adds, with its own estimators: direct light at x (one
+//! environment sample and one BRDF sample, power heuristic, shadow rays to infinity) and the
+//! one-bounce path environment → y → x, found only by strategy 1 (weight 1 there): at the y it
+//! hits, the environment's direct light is estimated the same way. Strategies 2 and 3 and their
+//! MIS denominators stay delta-light-only. Camera rays that miss the geometry return black.
+//!
 //! Strategy 3 makes glossy caustics (light → glossy reflector → diffuse receiver, e.g. the ring's
 //! cardioid) converge; strategy 1 handles glossy receivers; strategy 2 covers the paths in
 //! between. Random streams are keyed by (seed, pixel, sample) for camera paths and by
 //! (seed, light-path index) for light paths, and splats are summed in a fixed order, so the
 //! image does not depend on the thread count.
 
+use super::env_light::EnvLight;
 use super::reflectors::ReflectorSampler;
 use super::surface::{SurfacePoint, ray_epsilon, reflected_light};
 use crate::accel::Accel;
@@ -107,10 +114,15 @@ pub fn render(
     } else {
         0
     };
+    let eps = ray_epsilon(scene);
     let ctx = Ctx {
         scene,
         accel,
-        eps: ray_epsilon(scene),
+        eps,
+        env: scene
+            .environment
+            .as_ref()
+            .map(|env| EnvLight { accel, env, eps }),
         sampler,
         opts: *opts,
         camera,
@@ -159,6 +171,8 @@ struct Ctx<'a> {
     scene: &'a Scene,
     accel: &'a Accel,
     eps: f32,
+    /// The scene's environment map, if any.
+    env: Option<EnvLight<'a>>,
     sampler: Option<ReflectorSampler>,
     opts: RenderOptions,
     camera: Camera,
@@ -275,6 +289,9 @@ impl Ctx<'_> {
                 c.rays += 1;
                 l += reflected_light(self.accel, brdf, &sp, wo, light, self.eps);
             }
+            if let Some(env) = &self.env {
+                l += env.reflected(brdf, &sp, wo, rng, &mut c.rays);
+            }
         }
         if self.opts.indirect && self.scene.tri_object(hit.tri).receiver {
             let pdf_cam = self.pdf_camera(&sp, wo, hit.t);
@@ -346,6 +363,14 @@ impl Ctx<'_> {
                     pdf_camera_x: pdf_cam,
                 });
                 l += spp * f * lr / d;
+            }
+            // The environment's light reflected at y: BRDF sampling at x is the only strategy
+            // for these paths, so its weight is 1 (the estimate is f·L / (n₁ p₁)).
+            if let Some(env) = &self.env {
+                let lr = env.reflected(ybrdf, &yp, -wi, rng, &mut c.rays);
+                if lr != Vec3::ZERO {
+                    l += f * lr / (self.opts.bsdf_samples as f32 * pdf_b);
+                }
             }
         }
         // Strategy 2: light-side sampling of reflector points, connected to x.
