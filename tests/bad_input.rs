@@ -412,6 +412,13 @@ fn bad_cli_arguments_fail_cleanly() {
         vec!["--method", "sg", "--threshold", "NaN"],
         vec!["--method", "sg", "--cut", "triangle"],
         vec!["--method", "sg", "--visibility", "rays"],
+        vec!["--method", "prt", "--order", "0"],
+        vec!["--method", "prt", "--order", "40"],
+        vec!["--method", "prt", "--bounces", "99"],
+        vec!["--method", "prt", "--bounces", "0", "--indirect-only"],
+        vec!["--method", "prt", "--rotate-lighting", "NaN"],
+        vec!["--method", "prt", "--transfer", "glossy"],
+        vec!["--method", "prt", "--device", "tpu"],
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_interreflect"))
             .arg("render")
@@ -603,4 +610,25 @@ fn environment_renders_and_warns_where_it_should() {
         err.contains("warning") && err.contains("sg ignores environment lighting"),
         "{err}"
     );
+}
+
+#[test]
+fn bad_prt_settings_are_named() {
+    for (body, field) in [
+        ("order = 0", "methods.prt.order"),
+        ("order = 17", "methods.prt.order"),
+        ("bounces = 9", "methods.prt.bounces"),
+        ("samples = 0", "methods.prt.samples"),
+        ("samples = 100000000", "methods.prt.samples"),
+        ("window_width = -1.0", "methods.prt.window_width"),
+        ("window_width = nan", "methods.prt.window_width"),
+        ("spp = 0", "methods.prt.spp"),
+        ("transfer = \"glossy\"", "transfer"),
+        ("window = \"hamming\"", "window"),
+        ("oder = 3", "oder"),
+    ] {
+        let c = Case::new();
+        let s = scene_with(&c, &format!("{GOOD_HEAD}{PLANE}\n[methods.prt]\n{body}\n"));
+        assert_rejected(&c, &s, &["scene.toml", field]);
+    }
 }

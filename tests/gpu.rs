@@ -64,7 +64,12 @@ fn prt_relight_splits_work_over_the_binding_limit() {
     g.max_binding = 1000 * 64 * 12;
     let (transfer, lighting) = random_table(4321, 64, 9);
     let on_gpu = relight(&g, &transfer, 64, &lighting).expect("relight on the GPU");
-    assert_close(&on_gpu, &relight_cpu(&transfer, 64, &lighting), &transfer, &lighting);
+    assert_close(
+        &on_gpu,
+        &relight_cpu(&transfer, 64, &lighting),
+        &transfer,
+        &lighting,
+    );
 }
 
 #[test]

@@ -66,7 +66,10 @@ pub fn render(
     let ps = scene.settings.prt;
     let order = args.order.unwrap_or(ps.order);
     if !(1..=sh::MAX_ORDER).contains(&order) {
-        bail!("--order must be between 1 and {}, got {order}", sh::MAX_ORDER);
+        bail!(
+            "--order must be between 1 and {}, got {order}",
+            sh::MAX_ORDER
+        );
     }
     let bounces = args.bounces.unwrap_or(ps.bounces);
     if bounces > MAX_PRT_BOUNCES {
@@ -126,7 +129,7 @@ pub fn render(
     };
 
     let t = Instant::now();
-    let width_w = ps.window_width.unwrap_or(order as f32);
+    let width_w = ps.window_width.unwrap_or(2.0 * order as f32);
     let (mut lighting, warnings) = sh_lighting(scene, order, ps.window.window(width_w));
     for w in warnings {
         eprintln!("warning: {w}");
@@ -174,7 +177,8 @@ pub fn render(
         opts.effective_bounces(),
         transfer.vertices,
         transfer.bytes() as f64 / 1e6,
-        gpu.as_ref().map_or("CPU".to_string(), |g| format!("GPU ({})", g.adapter)),
+        gpu.as_ref()
+            .map_or("CPU".to_string(), |g| format!("GPU ({})", g.adapter)),
         secs.relight
     ));
 

@@ -6,11 +6,11 @@ use interreflect::accel::Accel;
 use interreflect::cut::CutOptions;
 use interreflect::fsutil::same_file;
 use interreflect::image::{Tonemap, write_exr, write_png};
+use interreflect::precompute::prt::TransferKind;
 use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
 use interreflect::render::cpu::{RenderOptions, render};
-use interreflect::precompute::prt::TransferKind;
 use interreflect::render::{Device, Method, Visibility};
 use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
 use serde::Serialize;
@@ -311,7 +311,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     }
     let t = Instant::now();
     let rendered = if args.method == Method::Prt {
-        let Some((img, prt_log)) = super::prt::render(&args, &scene, &accel, &pool, (width, height), spp, seed)?
+        let Some((img, prt_log)) =
+            super::prt::render(&args, &scene, &accel, &pool, (width, height), spp, seed)?
         else {
             return Ok(interrupted());
         };

@@ -2,9 +2,9 @@
 //! to the brute-force irradiance, per order, as a table and as images.
 
 use anyhow::{Context, bail};
-use interreflect::compare::{ErrorMapOptions, render_error_map};
 use interreflect::compare::metrics;
 use interreflect::compare::plot::{Raster, hstack};
+use interreflect::compare::{ErrorMapOptions, render_error_map};
 use interreflect::image::{Image, Tonemap, to_srgb8, write_exr, write_png_rgb8};
 use interreflect::math::sh;
 use interreflect::precompute::prt::WindowKind;
@@ -49,13 +49,23 @@ struct Row {
 
 pub fn run(a: ShIrradianceArgs) -> anyhow::Result<i32> {
     if !(1..=sh::MAX_ORDER).contains(&a.order) {
-        bail!("--order must be between 1 and {}, got {}", sh::MAX_ORDER, a.order);
+        bail!(
+            "--order must be between 1 and {}, got {}",
+            sh::MAX_ORDER,
+            a.order
+        );
     }
-    if !(4..=2048).contains(&a.width) || a.width % 2 != 0 {
-        bail!("--width must be an even number between 4 and 2048, got {}", a.width);
+    if !(4..=2048).contains(&a.width) || !a.width.is_multiple_of(2) {
+        bail!(
+            "--width must be an even number between 4 and 2048, got {}",
+            a.width
+        );
     }
     if !a.rotation.is_finite() {
-        bail!("--rotation must be a finite angle in degrees, got {}", a.rotation);
+        bail!(
+            "--rotation must be a finite angle in degrees, got {}",
+            a.rotation
+        );
     }
     let env = Environment::load(&a.env, a.rotation, 1.0)?;
     let out = a.output.clone().unwrap_or_else(|| {
@@ -149,11 +159,28 @@ pub fn run(a: ShIrradianceArgs) -> anyhow::Result<i32> {
         super::print_stdout(&(serde_json::to_string_pretty(&rows)? + "\n"));
     } else {
         let mut t = String::new();
-        outln!(t, "SH irradiance of {} ({}×{} map, window {:?}) against brute force:", a.env.display(), env.width(), env.height(), a.window);
-        outln!(t, "| order | coefficients | rel_rmse | max relative error |");
+        outln!(
+            t,
+            "SH irradiance of {} ({}×{} map, window {:?}) against brute force:",
+            a.env.display(),
+            env.width(),
+            env.height(),
+            a.window
+        );
+        outln!(
+            t,
+            "| order | coefficients | rel_rmse | max relative error |"
+        );
         outln!(t, "|---|---|---|---|");
         for r in &rows {
-            outln!(t, "| {} | {} | {:.2} % | {:.2} % |", r.order, r.coefficients, 100.0 * r.rel_rmse, 100.0 * r.max_rel_error);
+            outln!(
+                t,
+                "| {} | {} | {:.2} % | {:.2} % |",
+                r.order,
+                r.coefficients,
+                100.0 * r.rel_rmse,
+                100.0 * r.max_rel_error
+            );
         }
         super::print_stdout(&t);
     }

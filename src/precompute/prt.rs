@@ -489,7 +489,11 @@ pub fn cache_key(scene: &Scene, opts: &PrtOptions) -> u64 {
 
 /// The cache file of a scene and options under `dir`.
 pub fn cache_path(dir: &Path, scene: &Scene, opts: &PrtOptions) -> PathBuf {
-    dir.join(format!("{}-{:016x}.prt", scene.name, cache_key(scene, opts)))
+    dir.join(format!(
+        "{}-{:016x}.prt",
+        scene.name,
+        cache_key(scene, opts)
+    ))
 }
 
 fn encode(t: &Transfer) -> Vec<u8> {
@@ -584,9 +588,7 @@ pub fn load_or_compute(
                 .and_then(|_| crate::fsutil::write_bytes_atomic(&p, &encode(&t)));
             match written {
                 Ok(()) => CacheStatus::Stored(p),
-                Err(e) => {
-                    CacheStatus::Uncached(Some(format!("cannot write {}: {e}", p.display())))
-                }
+                Err(e) => CacheStatus::Uncached(Some(format!("cannot write {}: {e}", p.display()))),
             }
         }
     };

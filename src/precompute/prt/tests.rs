@@ -92,7 +92,10 @@ fn unshadowed_transfer_under_constant_light_is_albedo_times_radiance() {
     let expect = Vec3::new(0.6, 0.5, 0.4) * l;
     // Closed-form transfer and lighting: only float rounding separates them.
     for r in &rad {
-        assert!((*r - expect).abs().max_element() < 1e-5 * expect.max_element(), "{r} vs {expect}");
+        assert!(
+            (*r - expect).abs().max_element() < 1e-5 * expect.max_element(),
+            "{r} vs {expect}"
+        );
     }
 }
 
@@ -111,7 +114,10 @@ fn constant_environment_map_relights_to_albedo_times_radiance() {
     // constant band, a midpoint rule for the zonal bands l ≥ 1, whose residue on 32 rows is
     // below 1e-3 of the constant.
     for r in &rad {
-        assert!((*r - expect).abs().max_element() < 2e-3 * expect.max_element(), "{r} vs {expect}");
+        assert!(
+            (*r - expect).abs().max_element() < 2e-3 * expect.max_element(),
+            "{r} vs {expect}"
+        );
     }
 }
 
@@ -130,7 +136,12 @@ fn shadowed_transfer_without_occluders_matches_the_closed_form() {
         .enumerate()
     {
         // Coefficient 0 integrates a constant over rays that are all unoccluded: exact.
-        assert!((s[0] - c[0]).abs().max_element() < 1e-5, "vertex {v}: {} vs {}", s[0], c[0]);
+        assert!(
+            (s[0] - c[0]).abs().max_element() < 1e-5,
+            "vertex {v}: {} vs {}",
+            s[0],
+            c[0]
+        );
         // Bands 1 and 2 by 32×32 jittered cosine-distributed rays: the stratified estimate's
         // error is well under 1 % of the constant coefficient ρ·y₀₀.
         for i in 1..n {
@@ -175,11 +186,24 @@ fn the_lid_shadows_and_lights_the_floor_below_it() {
     let expect = 0.5 * (1.0 - form_factor);
     // 1024 stratified rays estimate the unoccluded fraction to a few tenths of a percent; 0.01
     // is 2 % of the unshadowed radiance.
-    assert!((direct[centre].x - expect).abs() < 0.01, "centre {} vs {expect}", direct[centre]);
+    assert!(
+        (direct[centre].x - expect).abs() < 0.01,
+        "centre {} vs {expect}",
+        direct[centre]
+    );
     assert!(direct[corner].x > 0.45, "corner {}", direct[corner]);
     // The red lid reflects red light down: the centre's bounce is red, the corner's is weak.
-    assert!(bounce[centre].x > 2.0 * bounce[centre].z, "centre bounce {}", bounce[centre]);
-    assert!(bounce[centre].x > 5.0 * bounce[corner].x, "{} vs {}", bounce[centre], bounce[corner]);
+    assert!(
+        bounce[centre].x > 2.0 * bounce[centre].z,
+        "centre bounce {}",
+        bounce[centre]
+    );
+    assert!(
+        bounce[centre].x > 5.0 * bounce[corner].x,
+        "{} vs {}",
+        bounce[centre],
+        bounce[corner]
+    );
     assert!(t.bounce.iter().all(|c| c.is_finite()));
 }
 
@@ -208,7 +232,9 @@ fn the_cache_returns_the_same_transfer_and_rejects_other_settings() {
     };
     assert_ne!(cache_key(&scene, &o), cache_key(&other, &o));
     // A damaged cache file is recomputed, not trusted and not an error.
-    let CacheStatus::Hit(path) = sb else { unreachable!() };
+    let CacheStatus::Hit(path) = sb else {
+        unreachable!()
+    };
     let mut bytes = std::fs::read(&path).unwrap();
     bytes.truncate(bytes.len() - 7);
     std::fs::write(&path, &bytes).unwrap();

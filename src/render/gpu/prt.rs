@@ -22,7 +22,9 @@ pub fn relight(
         what: "PRT relighting".into(),
         reason,
     };
-    if coefficients == 0 || lighting.len() != coefficients || transfer.len() % coefficients != 0
+    if coefficients == 0
+        || lighting.len() != coefficients
+        || !transfer.len().is_multiple_of(coefficients)
     {
         return Err(fail(format!(
             "inconsistent sizes: {} transfer entries, {} coefficients, {} lighting entries",
@@ -107,7 +109,8 @@ pub fn relight(
                 },
             ],
         });
-        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        let mut enc =
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("prt_relight"),
