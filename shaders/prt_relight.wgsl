@@ -4,7 +4,9 @@
 // Rust twin: `precompute::prt::relight_cpu` (and `render::gpu::prt::relight`, which dispatches
 // this shader over chunks of vertices so that no binding exceeds the device's limit).
 // Layouts (plain f32 arrays, no vec3 padding):
-//   transfer: [vertex][coefficient][rgb]   lighting: [coefficient][rgb]   radiance: [vertex][rgb]
+//   transfer: [coefficient][rgb][vertex] (structure of arrays: the invocations of a workgroup
+//             read consecutive addresses, which lavapipe's SIMD lanes load as vectors)
+//   lighting: [coefficient][rgb]   radiance: [vertex][rgb]
 
 struct Params {
     vertex_count: u32,
@@ -26,10 +28,11 @@ fn prt_relight(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let n = params.coefficients;
+    let count = params.vertex_count;
     var sum = vec3<f32>(0.0);
-    let base = v * n * 3u;
     for (var i = 0u; i < n; i = i + 1u) {
-        let t = vec3<f32>(transfer[base + 3u * i], transfer[base + 3u * i + 1u], transfer[base + 3u * i + 2u]);
+        let base = 3u * i * count + v;
+        let t = vec3<f32>(transfer[base], transfer[base + count], transfer[base + 2u * count]);
         let l = vec3<f32>(lighting[3u * i], lighting[3u * i + 1u], lighting[3u * i + 2u]);
         sum = sum + t * l;
     }

@@ -419,6 +419,8 @@ fn bad_cli_arguments_fail_cleanly() {
         vec!["--method", "prt", "--rotate-lighting", "NaN"],
         vec!["--method", "prt", "--transfer", "glossy"],
         vec!["--method", "prt", "--device", "tpu"],
+        vec!["--method", "prt", "--window-width", "-2"],
+        vec!["--method", "prt", "--window", "hamming"],
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_interreflect"))
             .arg("render")

@@ -76,7 +76,10 @@ fn prt_image(scene: &Scene, accel: &Accel, order: u32, indirect_only: bool) -> I
     let n = t.coefficients();
     let mut radiance = relight_cpu(&t.bounce, n, &lighting);
     if !indirect_only {
-        for (r, d) in radiance.iter_mut().zip(relight_cpu(&t.direct, n, &lighting)) {
+        for (r, d) in radiance
+            .iter_mut()
+            .zip(relight_cpu(&t.direct, n, &lighting))
+        {
             *r += d;
         }
     }

@@ -6,7 +6,7 @@ use interreflect::accel::Accel;
 use interreflect::cut::CutOptions;
 use interreflect::fsutil::same_file;
 use interreflect::image::{Tonemap, write_exr, write_png};
-use interreflect::precompute::prt::TransferKind;
+use interreflect::precompute::prt::{TransferKind, WindowKind};
 use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
@@ -82,6 +82,13 @@ pub struct RenderArgs {
     /// prt: reflections of the interreflected transfer (default: methods.prt.bounces).
     #[arg(long)]
     pub bounces: Option<u32>,
+    /// prt: window applied to the SH lighting (default: methods.prt.window).
+    #[arg(long, value_enum)]
+    pub window: Option<WindowKind>,
+    /// prt: band where the window reaches zero (default: methods.prt.window_width, or twice the
+    /// order).
+    #[arg(long)]
+    pub window_width: Option<f32>,
     /// prt: rotate the SH lighting about the up (+y) axis by this many degrees, without
     /// recomputing the transfer.
     #[arg(long, allow_hyphen_values = true)]
