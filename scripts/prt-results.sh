@@ -11,7 +11,9 @@
 # - precompute time and memory per order (the transfer computed afresh, --no-cache), and
 #   relighting time on the GPU and on the CPU.
 #
-#   scripts/prt-results.sh     (about 40 min on 2 cores; REF_SPP=256 for a quick look)
+#   scripts/prt-results.sh     (about 30 min on 2 cores; REF_SPP=256 for a quick look;
+#                              ONLY_COST=1 measures only the precompute and relighting costs;
+#                              SCENES="dragon" limits it to some scenes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ref_spp="${REF_SPP:-1024}"
@@ -31,11 +33,17 @@ timed() { # timed LOG -- command...: runs the command, appends its peak memory (
   local log="$1"; shift 2
   /usr/bin/time -f '%M' -o "$log.rss" "$@"
 }
-for scene in ring bunny dragon; do
+for scene in ${SCENES:-ring bunny dragon}; do
+  # ONLY_COST=1 skips the accuracy part (the references and the comparisons).
   for mat in diffuse glossy; do
+    [ "${ONLY_COST:-0}" = 1 ] && break
     for light in env sun; do
       name="$scene-$mat-$light"
       toml="scenes/prt/$name.toml"
+      # The PNG previews' exposure (the metrics use the linear EXRs): the dragon under the
+      # courtyard map is bright.
+      ev=0
+      [ "$scene-$light" = dragon-env ] && ev=-1.5
       for kind in full direct; do
         ref="$out/$name-reference.exr"
         args=(--method reference)
@@ -43,7 +51,7 @@ for scene in ring bunny dragon; do
         if [ ! -f "$ref" ]; then
           echo "== $name $kind reference ($ref_spp spp)"
           "$bin" render "$toml" "${args[@]}" --width "$width" --spp "$ref_spp" --seed 1 \
-            --output "$ref" --quiet
+            --exposure "$ev" --output "$ref" --quiet
         fi
       done
       for bounces in 1 0; do
@@ -51,7 +59,8 @@ for scene in ring bunny dragon; do
           tag="$name-prt-o$order-b$bounces"
           echo "== $tag"
           "$bin" render "$toml" --method prt --order "$order" --bounces "$bounces" \
-            --width "$width" --spp 4 --prt-cache "$cache" --output "$out/$tag.exr" --quiet
+            --width "$width" --spp 4 --prt-cache "$cache" --exposure "$ev" --output "$out/$tag.exr" \
+            --quiet
           ref="$out/$name-reference.exr"
           [ "$bounces" = 0 ] && ref="$out/$name-reference-direct.exr"
           "$bin" compare "$out/$tag.exr" "$ref" --json --error-map "$out/$tag-error.png" \
@@ -67,17 +76,24 @@ for scene in ring bunny dragon; do
       fi
     done
   done
-  # Precompute time and memory per order: the diffuse transfer with one bounce, computed afresh.
+  # Precompute time and memory per order: the diffuse transfer with one bounce, computed afresh
+  # (each order in an empty cache directory); then the order-8 transfer relit on the CPU.
   for order in 3 5 8; do
     echo "== $scene precompute, order $order"
+    fresh="$cache/cost-$scene-$order"
     timed "$out/$scene-precompute-o$order" -- "$bin" render "scenes/prt/$scene-diffuse-env.toml" \
-      --method prt --order "$order" --no-cache --width "$width" \
+      --method prt --order "$order" --prt-cache "$fresh" --width "$width" \
       --output "$out/$scene-precompute-o$order.exr" --quiet
   done
   echo "== $scene relighting on the CPU"
   "$bin" render "scenes/prt/$scene-diffuse-env.toml" --method prt --order 8 --device cpu \
-    --prt-cache "$cache" --width "$width" --output "$out/$scene-relight-cpu.exr" --quiet
+    --prt-cache "$cache/cost-$scene-8" --width "$width" --output "$out/$scene-relight-cpu.exr" \
+    --quiet
 done
+# PNG previews kept in the repository: reference, PRT at orders 3 and 8 with one bounce, its
+# error map, SG and its error map; the other orders keep their metrics only.
+rm -f "$out"/*-prt-o5-*.png "$out"/*-b0.png "$out"/*-b0-error.png "$out"/*-o3-b1-error.png \
+  "$out"/*-reference-direct.png
 rm -f "$out"/*-precompute-o*.exr "$out"/*-precompute-o*.png "$out"/*-relight-cpu.exr \
   "$out"/*-relight-cpu.png
 python3 scripts/prt-numbers.py "$out"

@@ -79,3 +79,23 @@ fn prt_relight_rejects_inconsistent_sizes() {
     let err = relight(&g, &transfer[..85], 9, &lighting).unwrap_err();
     assert!(err.to_string().contains("inconsistent sizes"), "{err}");
 }
+
+#[test]
+fn a_binding_over_the_device_limit_is_an_error_not_a_panic() {
+    let Some(mut g) = gpu() else { return };
+    let limit = g.max_binding;
+    if limit > 512 << 20 {
+        eprintln!(
+            "skipped: this device's binding limit ({limit} bytes) is too large to exceed cheaply"
+        );
+        return;
+    }
+    // Pretend the device takes any binding: the relighter then uploads the whole transfer as one
+    // buffer, past the real limit, and the device's validation must turn that into an error.
+    g.max_binding = u64::MAX;
+    let vertices = (limit / (64 * 12)) as usize + 1024;
+    let transfer = vec![Vec3::ONE; vertices * 64];
+    let err = relight(&g, &transfer, 64, &[Vec3::ONE; 64]).unwrap_err();
+    eprintln!("{err}");
+    assert!(err.to_string().contains("PRT relighting"), "{err}");
+}

@@ -177,26 +177,45 @@ pub fn render(
     // Relit RELIGHTS times (the lighting of an interactive session changes every frame); the
     // log keeps the fastest, the steady-state cost of one relighting.
     const RELIGHTS: usize = 3;
-    let mut radiance = Vec::new();
+    let radiance;
     let mut best = f64::INFINITY;
-    match &gpu {
-        Some(g) => {
+    let relight_on_cpu = |best: &mut f64| {
+        let mut radiance = Vec::new();
+        for _ in 0..RELIGHTS {
+            let t = Instant::now();
+            radiance = pool.install(|| relight_cpu(&total, n, &lighting));
+            *best = best.min(t.elapsed().as_secs_f64());
+        }
+        radiance
+    };
+    let mut gpu = gpu;
+    if let Some(g) = &gpu {
+        let on_gpu = (|| -> Result<Vec<Vec3>, interreflect::render::gpu::GpuError> {
             let t = Instant::now();
             let relighter = Relighter::new(g, &total, n)?;
             secs.upload = t.elapsed().as_secs_f64();
+            let mut radiance = Vec::new();
             for _ in 0..RELIGHTS {
                 let t = Instant::now();
                 radiance = relighter.relight(&lighting)?;
                 best = best.min(t.elapsed().as_secs_f64());
             }
-        }
-        None => {
-            for _ in 0..RELIGHTS {
-                let t = Instant::now();
-                radiance = pool.install(|| relight_cpu(&total, n, &lighting));
-                best = best.min(t.elapsed().as_secs_f64());
+            Ok(radiance)
+        })();
+        match on_gpu {
+            Ok(r) => radiance = r,
+            // With --device auto a failing GPU falls back to the CPU twin.
+            Err(e) if args.device == Device::Auto => {
+                eprintln!("notice: relighting on the CPU: the GPU failed: {e}");
+                gpu = None;
+                secs.upload = 0.0;
+                best = f64::INFINITY;
+                radiance = relight_on_cpu(&mut best);
             }
+            Err(e) => return Err(e.into()),
         }
+    } else {
+        radiance = relight_on_cpu(&mut best);
     }
     drop(total);
     secs.relight = best;

@@ -21,6 +21,9 @@ pub enum GpuError {
     Failed { what: String, reason: String },
 }
 
+/// Longest wait for the GPU to finish submitted work before giving up with an error.
+pub const WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
+
 /// An open device and its queue.
 pub struct Gpu {
     device: wgpu::Device,
@@ -62,10 +65,16 @@ impl Gpu {
             reason: e.to_string(),
         })?;
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let lost = uncaptured.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut v) = lost.lock() {
+                v.push(format!("device lost ({reason:?}): {message}"));
+            }
+        });
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
+                v.push(describe(&e));
             }
         }));
         Ok(Gpu {
@@ -95,12 +104,13 @@ impl Gpu {
         }
     }
 
-    /// Waits for all submitted work.
+    /// Waits for all submitted work, at most [`WAIT_LIMIT`]: a lost or hung device is an error,
+    /// never a hang.
     fn wait(&self, what: &str) -> Result<(), GpuError> {
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,
-                timeout: None,
+                timeout: Some(WAIT_LIMIT),
             })
             .map_err(|e| GpuError::Failed {
                 what: what.into(),
@@ -141,6 +151,17 @@ impl Gpu {
             .to_vec();
         staging.unmap();
         Ok(data)
+    }
+}
+
+/// The useful part of a wgpu error: its description (its `Display` says only "Validation
+/// Error"), on one line.
+pub(crate) fn describe(e: &wgpu::Error) -> String {
+    match e {
+        wgpu::Error::Validation { description, .. } | wgpu::Error::Internal { description, .. } => {
+            description.split_whitespace().collect::<Vec<_>>().join(" ")
+        }
+        wgpu::Error::OutOfMemory { .. } => "out of GPU memory".into(),
     }
 }
 

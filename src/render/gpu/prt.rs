@@ -5,7 +5,7 @@
 //! storage-binding limit) and then relights for any lighting by uploading only the order² SH
 //! coefficients — what an interactive viewer does every frame.
 
-use super::{Gpu, GpuError};
+use super::{Gpu, GpuError, describe};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
@@ -131,7 +131,7 @@ impl<'g> Relighter<'g> {
             });
         }
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(failed(e.to_string()));
+            return Err(failed(describe(&e)));
         }
         gpu.wait("PRT upload")?;
         gpu.check("PRT upload")?;
@@ -173,7 +173,7 @@ impl<'g> Relighter<'g> {
         }
         gpu.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(failed(e.to_string()));
+            return Err(failed(describe(&e)));
         }
         let mut out = Vec::new();
         for c in &self.chunks {
