@@ -300,9 +300,10 @@ impl Builder {
             None => None,
         };
         if lights.is_empty() && environment.is_none() {
-            self.warnings.push(
-                "no lights and no [environment]: every method will render a black image".into(),
-            );
+            self.warnings.push(format!(
+                "{}: lights: no lights and no [environment]: every method will render a black image",
+                self.path.display()
+            ));
         }
         let mut materials = Vec::new();
         for (mname, spec) in &file.materials {
@@ -660,13 +661,19 @@ impl Builder {
         let sf = |x: &str| format!("{field}.shape.{x}");
         Ok(match s {
             ShapeSpec::Mesh { file } => {
+                if file.trim().is_empty() {
+                    return Err(self.err(
+                        sf("file"),
+                        "must name a mesh file (.ply, .ply.gz, .obj, .obj.gz, .gltf or .glb)",
+                    ));
+                }
                 let p = self.dir.join(file);
                 let data = mesh::load_mesh(&p).map_err(|source| SceneError::Mesh {
                     path: self.path.clone(),
                     field: sf("file"),
                     source: Box::new(source),
                 })?;
-                let label = format!("{field} \"{oname}\" ({file})");
+                let label = format!("{}: {field} \"{oname}\" ({file})", self.path.display());
                 let (data, report) =
                     mesh::clean_mesh(data, &label).map_err(|source| SceneError::Mesh {
                         path: self.path.clone(),
