@@ -266,6 +266,10 @@ fn scene_files() {
             head_with("[5.0, 5.0, 5.0]", "[-5.0, 5.0, 5.0]", PLANE),
         ),
         (
+            "scene_light_intensity_beyond_the_limit",
+            head_with("[5.0, 5.0, 5.0]", "[5.0, 1e30, 5.0]", PLANE),
+        ),
+        (
             "scene_nan_light_position",
             head_with(
                 "position = [0.0, 3.0, 0.0]",
@@ -332,6 +336,18 @@ fn scene_files() {
         (
             "scene_zero_scale",
             format!("{GOOD_HEAD}{PLANE}transform = {{ scale = 0.0 }}\n"),
+        ),
+        (
+            "scene_object_scaled_beyond_the_coordinate_limit",
+            format!("{GOOD_HEAD}{PLANE}transform = {{ scale = 1e25 }}\n"),
+        ),
+        (
+            "scene_camera_beyond_the_coordinate_limit",
+            head_with(
+                "position = [0.0, 2.0, 4.0]",
+                "position = [0.0, 2.0, 1e30]",
+                PLANE,
+            ),
         ),
         (
             "scene_absurd_subdivisions",
@@ -404,7 +420,7 @@ fn mesh_files() {
       "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36}],
       "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
       "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0}"#;
-    let refused: [(&str, &str, Vec<u8>); 15] = [
+    let refused: [(&str, &str, Vec<u8>); 16] = [
         (
             "mesh_ply_truncated",
             "m.ply",
@@ -467,6 +483,11 @@ fn mesh_files() {
             "mesh_obj_overflowing_coordinate",
             "m.obj",
             b"v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n".to_vec(),
+        ),
+        (
+            "mesh_obj_coordinate_beyond_the_limit",
+            "m.obj",
+            b"v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n".to_vec(),
         ),
         (
             "mesh_gltf_missing_bin",
@@ -553,7 +574,7 @@ fn environment_maps() {
     // (name, the [environment] table, the files beside the scene)
     type Setup = fn(&Case);
     let none: Setup = |_| {};
-    let refused: [(&str, &str, Setup); 16] = [
+    let refused: [(&str, &str, Setup); 17] = [
         ("env_missing_file", "file = \"envmaps/missing.exr\"", none),
         ("env_file_name_empty", "file = \"\"", none),
         ("env_no_file_field", "rotation = 10.0", none),
@@ -599,6 +620,11 @@ fn environment_maps() {
                 b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y four +X 8\n",
             );
         }),
+        (
+            "env_scaled_radiance_beyond_the_limit",
+            "file = \"bright.exr\"\nintensity = 1e10",
+            |c| raw_exr(c, "bright.exr", 1e15),
+        ),
         ("env_png_extension", "file = \"env.png\"", |c| {
             c.file("env.png", b"\x89PNG");
         }),

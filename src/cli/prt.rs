@@ -34,6 +34,9 @@ pub struct PrtLog {
     transfer_megabytes: f64,
     /// "hit", "stored" or "off".
     cache: &'static str,
+    /// Vertices whose relit radiance is not finite (the image pass shows them black; should
+    /// stay 0).
+    nonfinite_vertices: u64,
     /// "gpu" or "cpu": where the relighting ran.
     relight_device: &'static str,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -227,6 +230,13 @@ pub fn render(
     }
     drop(total);
     secs.relight = best;
+    let nonfinite_vertices = radiance.iter().filter(|c| !c.is_finite()).count() as u64;
+    if nonfinite_vertices > 0 {
+        eprintln!(
+            "warning: {}: prt: {nonfinite_vertices} vertices were relit to non-finite radiance; the image shows them black",
+            scene.path.display()
+        );
+    }
     say(format!(
         "prt: order {order} ({n} coefficients), {:?} transfer, {} bounce(s), {} vertices ({:.1} MB); relit on the {} in {:.1} ms",
         opts.kind,
@@ -269,6 +279,7 @@ pub fn render(
             vertices: transfer.vertices,
             transfer_megabytes: transfer.bytes() as f64 / 1e6,
             cache,
+            nonfinite_vertices,
             relight_device: if gpu.is_some() { "gpu" } else { "cpu" },
             adapter: gpu.map(|g| g.adapter),
             seconds: secs,
