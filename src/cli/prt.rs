@@ -34,6 +34,9 @@ pub struct PrtLog {
     transfer_megabytes: f64,
     /// "hit", "stored" or "off".
     cache: &'static str,
+    /// Vertices whose relit radiance is not finite (the image pass shows them black; should
+    /// stay 0).
+    nonfinite_vertices: u64,
     /// "gpu" or "cpu": where the relighting ran.
     relight_device: &'static str,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -55,16 +58,17 @@ struct PrtTimings {
     image: f64,
 }
 
-/// Renders `scene` with PRT; `None` when interrupted.
-pub fn render(
-    args: &RenderArgs,
-    scene: &Scene,
-    accel: &Accel,
-    pool: &rayon::ThreadPool,
-    (width, height): (u32, u32),
-    spp: u32,
-    seed: u64,
-) -> anyhow::Result<Option<(Image, PrtLog)>> {
+/// The prt settings of a render: the command line over the scene's `[methods.prt]`, checked
+/// before any work is done.
+pub struct PrtSettings {
+    opts: PrtOptions,
+    rotation: f32,
+    window: WindowKind,
+    window_width: f32,
+}
+
+/// Resolves and checks the prt settings (errors name the flag).
+pub fn settings(args: &RenderArgs, scene: &Scene, seed: u64) -> anyhow::Result<PrtSettings> {
     let ps = scene.settings.prt;
     let order = args.order.unwrap_or(ps.order);
     if !(1..=sh::MAX_ORDER).contains(&order) {
@@ -93,6 +97,38 @@ pub fn render(
     if !rotation.is_finite() {
         bail!("--rotate-lighting must be a finite angle in degrees, got {rotation}");
     }
+    let window_width = args
+        .window_width
+        .or(ps.window_width)
+        .unwrap_or(2.0 * order as f32);
+    let max_width = 4.0 * sh::MAX_ORDER as f32;
+    if !(window_width.is_finite() && window_width > 0.0 && window_width <= max_width) {
+        bail!(
+            "--window-width must be a band number > 0 and at most {max_width}, got {window_width}"
+        );
+    }
+    Ok(PrtSettings {
+        opts,
+        rotation,
+        window: args.window.unwrap_or(ps.window),
+        window_width,
+    })
+}
+
+/// Renders `scene` with PRT; `None` when interrupted.
+pub fn render(
+    args: &RenderArgs,
+    scene: &Scene,
+    accel: &Accel,
+    pool: &rayon::ThreadPool,
+    (width, height): (u32, u32),
+    spp: u32,
+    settings: &PrtSettings,
+) -> anyhow::Result<Option<(Image, PrtLog)>> {
+    let opts = settings.opts;
+    let order = opts.order;
+    let rotation = settings.rotation;
+    let seed = opts.seed;
     let say = |s: String| {
         if !args.quiet {
             eprintln!("{s}");
@@ -131,17 +167,11 @@ pub fn render(
     };
 
     let t = Instant::now();
-    let window = args.window.unwrap_or(ps.window);
-    let width_w = args
-        .window_width
-        .or(ps.window_width)
-        .unwrap_or(2.0 * order as f32);
-    if !(width_w.is_finite() && width_w > 0.0) {
-        bail!("--window-width must be a band number > 0, got {width_w}");
-    }
+    let window = settings.window;
+    let width_w = settings.window_width;
     let (mut lighting, warnings) = sh_lighting(scene, order, window.window(width_w));
     for w in warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}: {w}", scene.path.display());
     }
     if rotation != 0.0 {
         let r = sh::ShRotation::new(order, Mat3::from_rotation_y(rotation.to_radians()));
@@ -219,6 +249,13 @@ pub fn render(
     }
     drop(total);
     secs.relight = best;
+    let nonfinite_vertices = radiance.iter().filter(|c| !c.is_finite()).count() as u64;
+    if nonfinite_vertices > 0 {
+        eprintln!(
+            "warning: {}: prt: {nonfinite_vertices} vertices were relit to non-finite radiance; the image shows them black",
+            scene.path.display()
+        );
+    }
     say(format!(
         "prt: order {order} ({n} coefficients), {:?} transfer, {} bounce(s), {} vertices ({:.1} MB); relit on the {} in {:.1} ms",
         opts.kind,
@@ -261,6 +298,7 @@ pub fn render(
             vertices: transfer.vertices,
             transfer_megabytes: transfer.bytes() as f64 / 1e6,
             cache,
+            nonfinite_vertices,
             relight_device: if gpu.is_some() { "gpu" } else { "cpu" },
             adapter: gpu.map(|g| g.adapter),
             seconds: secs,

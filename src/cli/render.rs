@@ -33,29 +33,29 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub cut: Option<CutMode>,
     /// Cut error threshold, a fraction of the estimate (default: methods.sg.threshold).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threshold: Option<f32>,
     /// Cut size cap, 0 = none (default: methods.sg.max_cut).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_cut: Option<u32>,
     /// Split reflector triangles to at most this edge length for sg, 0 = never
     /// (default: methods.sg.max_edge, or 1/128 of the scene's diagonal).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_edge: Option<f32>,
     /// Samples per pixel (default: the scene's render.spp; methods.sg.spp for sg and sg-brute).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub spp: Option<u32>,
     /// Seed of the random streams (default: the scene's render.seed).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Worker threads (default: all cores). The image does not depend on it.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Image width (default: the scene's camera.width; height follows the aspect if not given).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height (default: the scene's camera.height; width follows the aspect if not given).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Render only the one-bounce indirect light.
     #[arg(long)]
@@ -74,20 +74,20 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Device::Auto)]
     pub device: Device,
     /// prt: SH order, bands l < order (default: methods.prt.order).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub order: Option<u32>,
     /// prt: what the transfer includes (default: methods.prt.transfer).
     #[arg(long, value_enum)]
     pub transfer: Option<TransferKind>,
     /// prt: reflections of the interreflected transfer (default: methods.prt.bounces).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub bounces: Option<u32>,
     /// prt: window applied to the SH lighting (default: methods.prt.window).
     #[arg(long, value_enum)]
     pub window: Option<WindowKind>,
     /// prt: band where the window reaches zero (default: methods.prt.window_width, or twice the
     /// order).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub window_width: Option<f32>,
     /// prt: rotate the SH lighting about the up (+y) axis by this many degrees, without
     /// recomputing the transfer.
@@ -158,6 +158,9 @@ struct Timings {
     total: f64,
 }
 
+/// Largest accepted `--exposure`, in stops either way (2⁶⁴ is far past any image).
+const MAX_EXPOSURE: f32 = 64.0;
+
 fn resolve_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> {
     let (cw, ch) = (scene.camera.width, scene.camera.height);
     let (w, h) = match (args.width, args.height) {
@@ -199,6 +202,31 @@ fn output_path(args: &RenderArgs, scene: &Scene) -> anyhow::Result<PathBuf> {
     }
     let png = out.with_extension("png");
     let json = out.with_extension("json");
+    for o in [&out, &png, &json] {
+        if o.is_dir() {
+            bail!(
+                "--output {}: {} is a directory; the outputs (.exr, and .png and .json beside it) are files",
+                out.display(),
+                o.display()
+            );
+        }
+    }
+    // Missing directories are created when the outputs are written: the nearest existing
+    // ancestor must be a directory, or they cannot be.
+    let mut ancestor = out.parent();
+    while let Some(a) = ancestor.filter(|a| !a.as_os_str().is_empty()) {
+        if a.exists() {
+            if !a.is_dir() {
+                bail!(
+                    "--output {}: {} is not a directory, so the output's directory cannot be created there",
+                    out.display(),
+                    a.display()
+                );
+            }
+            break;
+        }
+        ancestor = a.parent();
+    }
     for input in std::iter::once(&scene.path).chain(scene.inputs.iter()) {
         for o in [&out, &png, &json] {
             if same_file(o, input) {
@@ -222,6 +250,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     }
     if let Some(0) = args.threads {
         bail!("--threads must be at least 1");
+    }
+    if !(args.exposure.is_finite() && args.exposure.abs() <= MAX_EXPOSURE) {
+        bail!(
+            "--exposure must be a finite number of stops between -{MAX_EXPOSURE} and {MAX_EXPOSURE}, got {}",
+            args.exposure
+        );
     }
     let scene = Scene::load(&args.scene)?;
     for w in &scene.warnings {
@@ -250,6 +284,31 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let seed = args.seed.unwrap_or(scene.settings.seed);
     let (width, height) = resolve_size(&args, &scene)?;
     let out = output_path(&args, &scene)?;
+    let r = scene.settings.reference;
+    let sgs = scene.settings.sg;
+    let cut = CutOptions {
+        threshold: args.threshold.unwrap_or(sgs.threshold),
+        max_cut: args.max_cut.unwrap_or(sgs.max_cut),
+    };
+    if !(cut.threshold.is_finite() && (0.0..=1.0).contains(&cut.threshold)) {
+        bail!(
+            "--threshold must be between 0 and 1 (a fraction of the estimate), got {}",
+            cut.threshold
+        );
+    }
+    let cut_mode = args.cut.unwrap_or(sgs.cut);
+    let max_edge = args
+        .max_edge
+        .or(sgs.max_edge)
+        .unwrap_or_else(|| scene.mesh.diagonal() / 128.0);
+    if !(max_edge.is_finite() && max_edge >= 0.0) {
+        bail!("--max-edge must be a length ≥ 0 (0 = never split), got {max_edge}");
+    }
+    let prt = if args.method == Method::Prt {
+        Some(super::prt::settings(&args, &scene, seed)?)
+    } else {
+        None
+    };
     times.load = t0.elapsed().as_secs_f64();
 
     let pool = {
@@ -296,30 +355,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("warning: {}: {w}", scene.path.display());
     }
 
-    let r = scene.settings.reference;
-    let sgs = scene.settings.sg;
-    let cut = CutOptions {
-        threshold: args.threshold.unwrap_or(sgs.threshold),
-        max_cut: args.max_cut.unwrap_or(sgs.max_cut),
-    };
-    if !(cut.threshold.is_finite() && (0.0..=1.0).contains(&cut.threshold)) {
-        bail!(
-            "--threshold must be between 0 and 1 (a fraction of the estimate), got {}",
-            cut.threshold
-        );
-    }
-    let cut_mode = args.cut.unwrap_or(sgs.cut);
-    let max_edge = args
-        .max_edge
-        .or(sgs.max_edge)
-        .unwrap_or_else(|| scene.mesh.diagonal() / 128.0);
-    if !(max_edge.is_finite() && max_edge >= 0.0) {
-        bail!("--max-edge must be a length ≥ 0 (0 = never split), got {max_edge}");
-    }
     let t = Instant::now();
-    let rendered = if args.method == Method::Prt {
+    let rendered = if let Some(prt) = &prt {
         let Some((img, prt_log)) =
-            super::prt::render(&args, &scene, &accel, &pool, (width, height), spp, seed)?
+            super::prt::render(&args, &scene, &accel, &pool, (width, height), spp, prt)?
         else {
             return Ok(interrupted());
         };
@@ -428,8 +467,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let t = Instant::now();
     let png = out.with_extension("png");
     let json = out.with_extension("json");
-    write_exr(&out, &img)?;
-    write_png(&png, &img, &tm)?;
+    // All three outputs or none: a failed write removes those this run wrote before it.
+    let mut written: Vec<&Path> = Vec::new();
+    let remove_written = |written: &[&Path]| {
+        for p in written {
+            let _ = std::fs::remove_file(p);
+        }
+    };
+    if let Err(e) = write_exr(&out, &img) {
+        return Err(e.into());
+    }
+    written.push(&out);
+    if let Err(e) = write_png(&png, &img, &tm) {
+        remove_written(&written);
+        return Err(e.into());
+    }
+    written.push(&png);
     times.write = t.elapsed().as_secs_f64();
     times.total = t0.elapsed().as_secs_f64();
     let log_data = RenderLog {
@@ -450,8 +503,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         prt: prt_log,
     };
     let text = serde_json::to_string_pretty(&log_data)? + "\n";
-    interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes())
-        .with_context(|| format!("cannot write {}", json.display()))?;
+    if let Err(e) = interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes()) {
+        remove_written(&written);
+        return Err(anyhow::Error::new(e).context(format!("cannot write {}", json.display())));
+    }
     log(format!(
         "wrote {} (linear), {} ({})",
         out.display(),

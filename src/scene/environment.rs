@@ -108,7 +108,8 @@ impl Environment {
 
     /// Constructs from an image (rows from the top): checks the size (1 … [`MAX_TEXELS`]
     /// texels, the buffer length), that every texel is finite and ≥ 0, that `rotation_deg` is
-    /// finite and `intensity` finite and ≥ 0; applies `intensity`; builds the sampling
+    /// finite and `intensity` finite and ≥ 0; applies `intensity` (every texel must then be at
+    /// most [`MAX_EMISSION`](super::MAX_EMISSION)); builds the sampling
     /// distribution. Any width × height is accepted (each texel spans 2π/W × π/H); lat-long maps
     /// are 2:1 and the scene loader warns otherwise.
     pub fn from_image(
@@ -157,6 +158,22 @@ impl Environment {
             ));
         }
         let texels: Vec<Vec3> = img.data.into_iter().map(|p| p * intensity).collect();
+        // Checked after the scale: a bright texel times a large intensity overflows f32.
+        if let Some(i) = texels
+            .iter()
+            .position(|p| !(p.max_element() <= super::MAX_EMISSION))
+        {
+            let v = texels[i];
+            return Err(format!(
+                "texel (x {}, y {}) scaled by intensity {intensity} is ({:e}, {:e}, {:e}): radiance must be at most {:e} per channel",
+                i % w as usize,
+                i / w as usize,
+                v.x,
+                v.y,
+                v.z,
+                super::MAX_EMISSION
+            ));
+        }
         let mut solid_angle = Vec::with_capacity(h as usize);
         let mut cos_top = Vec::with_capacity(h as usize);
         for y in 0..h {

@@ -387,3 +387,28 @@ fn resampling_preserves_the_integral() {
         / (2.0 * (wa + wb));
     assert!((r.get(x, y).as_dvec3() - expect).abs().max_element() < 1e-5);
 }
+
+/// A bright texel times a large intensity used to overflow to ∞ (prt then relit vertices to
+/// NaN, the reference dropped non-finite samples): radiance above MAX_EMISSION after the scale
+/// is refused, naming the texel; up to it the map loads and its integral stays finite.
+#[test]
+fn scaled_radiance_beyond_the_limit_is_refused() {
+    let img = Image::from_fn(8, 4, |x, y| {
+        Vec3::splat(if (x, y) == (3, 1) { 4e36 } else { 1.0 })
+    });
+    let e = Environment::from_image(img.clone(), 0.0, 1e20).unwrap_err();
+    assert!(
+        e.starts_with(
+            "texel (x 3, y 1) scaled by intensity 100000000000000000000 is (inf, inf, inf)"
+        ) && e.ends_with("at most 1e20 per channel"),
+        "{e}"
+    );
+    let e = Environment::from_image(img, 0.0, 1.0).unwrap_err();
+    assert!(
+        e.starts_with("texel (x 3, y 1) scaled by intensity 1 is (4e36"),
+        "{e}"
+    );
+    let ok =
+        Environment::from_image(Image::from_fn(8, 4, |_, _| Vec3::splat(1e10)), 0.0, 1e10).unwrap();
+    assert!(ok.integrated_luminance().is_finite() && ok.integrated_luminance() > 0.0);
+}

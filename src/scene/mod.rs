@@ -35,6 +35,21 @@ pub const MAX_PRT_BOUNCES: u32 = 8;
 /// Largest accepted `methods.prt.samples` (ray directions per vertex).
 pub const MAX_PRT_SAMPLES: u32 = 1 << 16;
 
+/// Largest accepted world-space coordinate, in either direction, of the camera and of every
+/// vertex after its object's transform. f32's spacing there is already 8 units, so a scene that
+/// reaches it keeps no usable precision; beyond it squared lengths (the scene's diagonal, the
+/// areas of triangles, 1/d² falloffs) and their squares would overflow f32 to ∞ and turn the
+/// renderers' arithmetic into NaN.
+pub const MAX_COORDINATE: f32 = 1e8;
+
+/// Largest accepted emission, per RGB channel: a light's intensity (W/sr) or irradiance (W/m²),
+/// and an environment map's radiance after its `intensity` scale. The sun's radiance is about
+/// 1e9 in these units; 1e20 leaves eleven orders of magnitude for unit choices, while the
+/// products the renderers form with it (BRDF peaks up to ~1e6 for the sharpest accepted lobes,
+/// 1/d² falloffs, sums over texels and coefficients) stay far below f32's 3.4e38. Above it a map
+/// scaled by its intensity overflowed to ∞ and prt relit vertices to NaN.
+pub const MAX_EMISSION: f32 = 1e20;
+
 /// Largest accepted `methods.sg.max_cut`.
 pub const MAX_CUT: u32 = 1 << 24;
 
@@ -252,10 +267,29 @@ impl Builder {
         }
     }
 
-    fn nonneg3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+    /// A point within ±[`MAX_COORDINATE`] in every coordinate.
+    fn coordinate3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let x = self.finite3(field, v)?;
+        if !(x.abs().max_element() <= MAX_COORDINATE) {
+            return Err(self.err(
+                field,
+                format!("must lie within ±{MAX_COORDINATE:e} in every coordinate, got {v:?}"),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// An emission: finite, ≥ 0 and at most [`MAX_EMISSION`] per channel.
+    fn emission3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
         let x = self.finite3(field, v)?;
         if x.min_element() < 0.0 {
             return Err(self.err(field, format!("must not be negative, got {v:?}")));
+        }
+        if x.max_element() > MAX_EMISSION {
+            return Err(self.err(
+                field,
+                format!("must be at most {MAX_EMISSION:e} per channel, got {v:?}"),
+            ));
         }
         Ok(x)
     }
@@ -300,9 +334,10 @@ impl Builder {
             None => None,
         };
         if lights.is_empty() && environment.is_none() {
-            self.warnings.push(
-                "no lights and no [environment]: every method will render a black image".into(),
-            );
+            self.warnings.push(format!(
+                "{}: lights: no lights and no [environment]: every method will render a black image",
+                self.path.display()
+            ));
         }
         let mut materials = Vec::new();
         for (mname, spec) in &file.materials {
@@ -343,7 +378,32 @@ impl Builder {
             let (data, source) = self.shape(&field, &oname, &o.shape, &mut inputs)?;
             let xf = self.transform(&field, &o.transform)?;
             let first_tri = mesh.indices.len() as u32;
+            let first_vertex = mesh.positions.len();
             append_transformed(&mut mesh, &data, xf, objects.len() as u32);
+            if let Some((v, p)) = mesh.positions[first_vertex..]
+                .iter()
+                .enumerate()
+                .find(|(_, p)| !(p.abs().max_element() <= MAX_COORDINATE))
+            {
+                let axis = (0..3)
+                    .max_by(|&a, &b| p[a].abs().total_cmp(&p[b].abs()))
+                    .unwrap_or(0);
+                let is_mesh = matches!(o.shape, ShapeSpec::Mesh { .. });
+                let (at, of) = match (o.transform.is_identity(), is_mesh) {
+                    (true, true) => (format!("{field}.shape.file"), format!(" of {source}")),
+                    (true, false) => (format!("{field}.shape"), String::new()),
+                    (false, true) => (format!("{field}.transform"), format!(" of {source}")),
+                    (false, false) => (format!("{field}.transform"), String::new()),
+                };
+                return Err(self.err(
+                    at,
+                    format!(
+                        "vertex {v}{of} has world-space {} = {:e}, beyond ±{MAX_COORDINATE:e}: scale the object down",
+                        ["x", "y", "z"][axis],
+                        p[axis]
+                    ),
+                ));
+            }
             let tri_count = mesh.indices.len() as u32 - first_tri;
             objects.push(Object {
                 name: oname,
@@ -531,8 +591,8 @@ impl Builder {
     }
 
     fn camera(&self, c: &CameraSpec) -> Result<Camera, SceneError> {
-        let pos = self.finite3("camera.position", c.position)?;
-        let at = self.finite3("camera.look_at", c.look_at)?;
+        let pos = self.coordinate3("camera.position", c.position)?;
+        let at = self.coordinate3("camera.look_at", c.look_at)?;
         let up = self.unit3("camera.up", c.up)?;
         if !(c.fov_y.is_finite() && c.fov_y > 0.0 && c.fov_y < 180.0) {
             return Err(self.err(
@@ -610,7 +670,7 @@ impl Builder {
                 intensity,
             } => Light::Point {
                 position: self.finite3(&f("position"), *position)?,
-                intensity: self.nonneg3(&f("intensity"), *intensity)?,
+                intensity: self.emission3(&f("intensity"), *intensity)?,
             },
             LightSpec::Spot {
                 position,
@@ -635,7 +695,7 @@ impl Builder {
                 Light::Spot {
                     position: self.finite3(&f("position"), *position)?,
                     direction: self.unit3(&f("direction"), *direction)?,
-                    intensity: self.nonneg3(&f("intensity"), *intensity)?,
+                    intensity: self.emission3(&f("intensity"), *intensity)?,
                     cos_cone: cone_angle.to_radians().cos(),
                     cos_falloff: fall.to_radians().cos(),
                 }
@@ -645,7 +705,7 @@ impl Builder {
                 irradiance,
             } => Light::Directional {
                 direction: self.unit3(&f("direction"), *direction)?,
-                irradiance: self.nonneg3(&f("irradiance"), *irradiance)?,
+                irradiance: self.emission3(&f("irradiance"), *irradiance)?,
             },
         })
     }
@@ -660,6 +720,12 @@ impl Builder {
         let sf = |x: &str| format!("{field}.shape.{x}");
         Ok(match s {
             ShapeSpec::Mesh { file } => {
+                if file.trim().is_empty() {
+                    return Err(self.err(
+                        sf("file"),
+                        "must name a mesh file (.ply, .ply.gz, .obj, .obj.gz, .gltf or .glb)",
+                    ));
+                }
                 let p = self.dir.join(file);
                 let data = mesh::load_mesh(&p).map_err(|source| SceneError::Mesh {
                     path: self.path.clone(),
@@ -673,7 +739,13 @@ impl Builder {
                         field: sf("file"),
                         source: Box::new(source),
                     })?;
-                self.warnings.extend(report.warnings);
+                let scene_file = self.path.display().to_string();
+                self.warnings.extend(
+                    report
+                        .warnings
+                        .into_iter()
+                        .map(|w| format!("{scene_file}: {w}")),
+                );
                 inputs.push(p);
                 (data, file.clone())
             }
@@ -820,5 +892,68 @@ fn append_transformed(mesh: &mut SceneMesh, data: &MeshData, xf: Mat4, object: u
         let t = if mirror { [t[0], t[2], t[1]] } else { *t };
         mesh.indices.push(t.map(|i| i + base));
         mesh.tri_object.push(object);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEAD: &str = r#"
+[camera]
+position = [0.0, 2.0, 4.0]
+look_at = [0.0, 0.0, 0.0]
+fov_y = 40.0
+width = 8
+height = 8
+[materials.white]
+model = "lambert"
+diffuse = [0.5, 0.5, 0.5]
+"#;
+
+    fn load(text: &str) -> Result<Scene, SceneError> {
+        Scene::from_str_at(text, Path::new("s.toml"))
+    }
+
+    /// Geometry or a camera beyond ±MAX_COORDINATE is refused with the field named; before,
+    /// an object scaled by 1e25 overflowed the scene's diagonal to ∞ (reported as a bad
+    /// `--max-edge` the user never gave), and a camera at 1e30 as "camera.up is parallel to the
+    /// viewing direction".
+    #[test]
+    fn coordinates_beyond_the_limit_are_refused() {
+        let sphere =
+            "[[objects]]\nmaterial = \"white\"\nshape = { type = \"sphere\", radius = 0.5 }\n";
+        for (extra, field) in [
+            ("transform = { scale = 1e25 }", "objects[0].transform"),
+            (
+                "transform = { translate = [3e38, 0.0, 0.0] }",
+                "objects[0].transform",
+            ),
+            ("transform = { scale = 2.1e8 }", "objects[0].transform"),
+        ] {
+            let e = load(&format!("{HEAD}{sphere}{extra}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with(&format!("s.toml: {field}: vertex "))
+                    && e.contains(", beyond ±1e8: "),
+                "{e}"
+            );
+        }
+        let e = load(&format!("{}{sphere}", HEAD.replace("4.0]", "1e30]")))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("s.toml: camera.position: must lie within ±1e8"),
+            "{e}"
+        );
+        // Up to the limit is fine, and the diagonal stays finite.
+        let s = load(&format!("{HEAD}{sphere}transform = {{ scale = 1.9e8 }}\n")).unwrap();
+        assert!(s.mesh.diagonal().is_finite());
+        let far = load(&format!(
+            "{HEAD}{sphere}transform = {{ translate = [9.9e7, -9.9e7, 9.9e7] }}\n"
+        ))
+        .unwrap();
+        assert!(far.mesh.diagonal().is_finite());
     }
 }

@@ -270,6 +270,13 @@ pub struct TransformSpec {
     pub scale: Option<ScaleSpec>,
 }
 
+impl TransformSpec {
+    /// True when nothing is given (the object stays as its shape defines it).
+    pub fn is_identity(&self) -> bool {
+        self.translate.is_none() && self.rotate.is_none() && self.scale.is_none()
+    }
+}
+
 #[derive(Debug, Deserialize, Clone, Copy)]
 #[serde(untagged)]
 pub enum ScaleSpec {

@@ -85,6 +85,13 @@ pub enum MeshError {
         error: std::io::Error,
     },
 
+    /// The path names a directory.
+    #[error(
+        "{}: is a directory, not a mesh file (.ply, .ply.gz, .obj, .obj.gz, .gltf or .glb)",
+        path.display()
+    )]
+    IsDirectory { path: PathBuf },
+
     /// The file name has no supported extension.
     #[error(
         "{}: unknown mesh file extension (supported: .ply, .ply.gz, .obj, .obj.gz, .gltf, .glb)",
@@ -265,6 +272,11 @@ fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, MeshError> {
 /// Validates everything (see `docs/meshes.md`); non-finite *positions* are errors, while
 /// non-finite or zero *normals* are passed through for [`clean_mesh`] to repair.
 pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
+    if path.is_dir() {
+        return Err(MeshError::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
     let (format, gz) = format_of(path)?;
     let raw = std::fs::read(path).map_err(|error| MeshError::Read {
         path: path.to_path_buf(),

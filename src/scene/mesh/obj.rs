@@ -322,6 +322,15 @@ fn resolve(
             detail: format!("face corner '{}' has a non-integer {kind} index", clip(tok)),
         });
     };
+    if i == 0 {
+        return Err(MeshError::Syntax {
+            path: path.to_path_buf(),
+            at: format!("line {line_no} (face corner '{}')", clip(tok)),
+            detail: format!(
+                "{kind} index 0 is invalid: OBJ indices start at 1 (negative ones count back from the last {kind} defined)"
+            ),
+        });
+    }
     let resolved = if i > 0 {
         i - 1
     } else if i < 0 {

@@ -1042,7 +1042,17 @@ fn bad_obj_missing_vertex() {
         "zero.obj",
         b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
     );
-    load_err(&path, &["line 4", "vertex index 0 is out of range"]);
+    load_err(
+        &path,
+        &[
+            "line 4",
+            "vertex index 0 is invalid: OBJ indices start at 1",
+        ],
+    );
+    // A directory named like a mesh.
+    let path = dir.path().join("folder.ply");
+    std::fs::create_dir(&path).unwrap();
+    load_err(&path, &["is a directory, not a mesh file"]);
     let path = write_file(
         dir.path(),
         "normal.obj",
