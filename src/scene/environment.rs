@@ -4,7 +4,9 @@
 //! to Mitsuba with `to_world = rotate([0, 1, 0], rotation)` sees the same sky): in the map's own
 //! frame a unit direction d = (x, y, z) has
 //!
-//!     u = atan2(x, −z) / 2π  (wrapped into [0, 1)),   v = acos(y) / π,
+//! ```text
+//! u = atan2(x, −z) / 2π  (wrapped into [0, 1)),   v = acos(y) / π,
+//! ```
 //!
 //! and conversely d(u, v) = (sin φ sin θ, cos θ, −cos φ sin θ) with φ = 2πu, θ = πv. So row 0
 //! (v = 0) is straight up (+y), the last row straight down; the left edge (u = 0) looks along −z,
