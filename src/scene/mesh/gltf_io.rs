@@ -18,6 +18,16 @@ use gltf::accessor::{DataType, Dimensions};
 
 use super::{MeshData, MeshError};
 
+/// Where a glTF's buffers may come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Buffers {
+    /// GLB binary chunk, data URIs and files relative to the glTF file (a file on disk).
+    Files,
+    /// GLB binary chunk and data URIs only (a glTF held in memory: there is no directory to
+    /// resolve relative URIs against).
+    Embedded,
+}
+
 fn gltf_err(path: &Path, detail: impl Into<String>) -> MeshError {
     MeshError::Gltf {
         path: path.to_path_buf(),
@@ -134,6 +144,7 @@ fn load_buffers(
     path: &Path,
     doc: &gltf::Document,
     mut blob: Option<&[u8]>,
+    sources: Buffers,
 ) -> Result<Vec<Vec<u8>>, MeshError> {
     let base = path.parent().unwrap_or(Path::new("."));
     let mut out = Vec::new();
@@ -166,6 +177,15 @@ fn load_buffers(
                         path: path.to_path_buf(),
                         detail: format!(
                             "buffer {i}: URI '{uri}' (only relative file paths and data URIs are supported)"
+                        ),
+                    });
+                }
+                if sources == Buffers::Embedded {
+                    return Err(MeshError::Unsupported {
+                        path: path.to_path_buf(),
+                        detail: format!(
+                            "buffer {i}: external URI '{uri}' (a glTF parsed from memory can only use \
+                             its GLB binary chunk and base64 data URIs)"
                         ),
                     });
                 }
@@ -505,7 +525,7 @@ fn visit_roots(
     Ok(())
 }
 
-fn parse_inner(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
+fn parse_inner(path: &Path, data: &[u8], sources: Buffers) -> Result<MeshData, MeshError> {
     let (json, blob) = if data.starts_with(b"glTF") {
         split_glb(path, data)?
     } else {
@@ -519,7 +539,7 @@ fn parse_inner(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
             detail: format!("the file requires the glTF extension {ext}"),
         });
     }
-    let buffers = load_buffers(path, doc, blob)?;
+    let buffers = load_buffers(path, doc, blob, sources)?;
     let mut out = Merged {
         positions: Vec::new(),
         normals: Vec::new(),
@@ -566,10 +586,16 @@ fn parse_inner(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
     })
 }
 
-/// Parses a `.gltf` (JSON) or `.glb` (binary) file; external buffers are resolved relative to
-/// `path`'s directory.
-pub(super) fn parse_gltf(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| parse_inner(path, data))) {
+/// Parses a `.gltf` (JSON) or `.glb` (binary) file; with [`Buffers::Files`], external buffers
+/// are resolved relative to `path`'s directory, with [`Buffers::Embedded`] they are an error.
+pub(super) fn parse_gltf(
+    path: &Path,
+    data: &[u8],
+    sources: Buffers,
+) -> Result<MeshData, MeshError> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        parse_inner(path, data, sources)
+    })) {
         Ok(result) => result,
         Err(panic) => {
             let msg = panic
