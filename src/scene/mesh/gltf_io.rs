@@ -525,14 +525,48 @@ fn visit_roots(
     Ok(())
 }
 
+/// Parses and validates the JSON document.
+///
+/// The `gltf` crate's validation (gltf-json 1.4.1, `mesh.rs`, `primitive_validate_hook`) indexes
+/// the accessor array with each primitive's `POSITION` index before that index is checked, and
+/// panics when it is out of range (found by fuzzing: `tests/data/fuzz/gltf/position-accessor-
+/// out-of-range`). That index is therefore checked here first, on the unvalidated document.
+fn parse_document(path: &Path, json: &[u8]) -> Result<gltf::Document, MeshError> {
+    use gltf::json::mesh::Semantic;
+    use gltf::json::validation::Checked;
+
+    let unchecked = gltf::Gltf::from_slice_without_validation(json)
+        .map_err(|e| gltf_err(path, e.to_string()))?
+        .document
+        .into_json();
+    let accessors = unchecked.accessors.len();
+    for (m, mesh) in unchecked.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&Checked::Valid(Semantic::Positions))
+                && i.value() >= accessors
+            {
+                return Err(gltf_err(
+                    path,
+                    format!(
+                        "meshes[{m}].primitives[{p}].attributes[\"POSITION\"]: accessor {} does \
+                         not exist (there are {accessors} accessors)",
+                        i.value()
+                    ),
+                ));
+            }
+        }
+    }
+    gltf::Document::from_json(unchecked).map_err(|e| gltf_err(path, e.to_string()))
+}
+
 fn parse_inner(path: &Path, data: &[u8], sources: Buffers) -> Result<MeshData, MeshError> {
     let (json, blob) = if data.starts_with(b"glTF") {
         split_glb(path, data)?
     } else {
         (data, None)
     };
-    let gltf = gltf::Gltf::from_slice(json).map_err(|e| gltf_err(path, e.to_string()))?;
-    let doc = &gltf.document;
+    let doc = parse_document(path, json)?;
+    let doc = &doc;
     if let Some(ext) = doc.extensions_required().next() {
         return Err(MeshError::Unsupported {
             path: path.to_path_buf(),
