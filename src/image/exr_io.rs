@@ -39,6 +39,9 @@ pub fn read_exr_bytes(bytes: &[u8], name: &str) -> Result<Image, ImageError> {
 /// image the renderer writes. A header declaring more is refused before decoding.
 pub const MAX_EXR_PIXELS: u64 = 1 << 28;
 
+/// Files at least this large are decompressed in parallel (see [`decode_exr`]).
+pub(crate) const PARALLEL_EXR_BYTES: usize = 256 << 10;
+
 /// Decodes an OpenEXR file held in memory (see [`read_exr`]); `path` names it in errors.
 fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
     let decode_err = |e: exr::error::Error| ImageError::ExrDecode {
@@ -84,7 +87,7 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
     // The pixel buffer grows as decoded pixels arrive (rather than being allocated from the
     // header's size up front), so a file that declares a large image but holds little or no
     // pixel data fails before it costs memory.
-    let image = x::read()
+    let reader = x::read()
         .no_deep_data()
         .largest_resolution_level()
         .rgb_channels(
@@ -101,7 +104,15 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
         )
         .first_valid_layer()
         .all_attributes()
-        .pedantic()
+        .pedantic();
+    // The exr crate builds a thread pool per file to decompress blocks in parallel; for a small
+    // file that costs more than it saves, so it is decoded on the calling thread.
+    let reader = if bytes.len() < PARALLEL_EXR_BYTES {
+        reader.non_parallel()
+    } else {
+        reader
+    };
+    let image = reader
         .from_buffered(Cursor::new(&bytes[..]))
         .map_err(decode_err)?;
 

@@ -163,6 +163,24 @@ fn reads_f32_exr_with_other_compressions_and_tiles() {
 }
 
 #[test]
+fn small_and_large_exr_files_decode_alike() {
+    // Below PARALLEL_EXR_BYTES a file is decoded on the calling thread, above it in parallel.
+    let dir = tempfile::tempdir().unwrap();
+    for (w, h) in [(7, 5), (256, 256)] {
+        let p = dir.path().join(format!("{w}.exr"));
+        let img = varied_image(w, h);
+        write_exr(&p, &img).unwrap();
+        let len = std::fs::metadata(&p).unwrap().len() as usize;
+        assert_eq!(
+            len >= super::exr_io::PARALLEL_EXR_BYTES,
+            w == 256,
+            "{len} bytes"
+        );
+        assert_eq!(bits(&read_exr(&p).unwrap()), bits(&img), "{w}x{h}");
+    }
+}
+
+#[test]
 fn exr_bytes_read_like_the_file_and_huge_headers_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("a.exr");
