@@ -50,8 +50,8 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
     };
 
     // Check the channels first so that a file without RGB gets a message listing what it has.
-    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes[..]), true)
-        .map_err(decode_err)?;
+    let meta =
+        exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), true).map_err(decode_err)?;
     let rgb_layer = meta.headers.iter().find(|h| {
         let has = |n: &str| h.channels.list.iter().any(|c| c.name.eq(n));
         has("R") && has("G") && has("B")
@@ -113,7 +113,7 @@ fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
         reader
     };
     let image = reader
-        .from_buffered(Cursor::new(&bytes[..]))
+        .from_buffered(Cursor::new(bytes))
         .map_err(decode_err)?;
 
     let size = image.layer_data.size;
