@@ -17,8 +17,8 @@ use crate::fsutil::write_bytes_atomic;
 /// - Mip/rip-mapped files: the largest level is read. The layer's data window becomes the image.
 /// - Decoding is pedantic: truncated or inconsistent files are errors, not partially black images.
 ///
-/// Errors: unreadable file ([`ImageError::Read`]), invalid/truncated data
-/// ([`ImageError::ExrDecode`]), no layer with R, G and B ([`ImageError::MissingChannels`], listing
+/// Errors: unreadable file ([`ImageError::Read`]), invalid/truncated data or a layer of more than
+/// [`MAX_EXR_PIXELS`] pixels ([`ImageError::ExrDecode`]), no layer with R, G and B ([`ImageError::MissingChannels`], listing
 /// the channels that exist), a NaN or infinite sample ([`ImageError::NonFinitePixel`], naming the
 /// first such pixel in row-major order).
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
@@ -27,19 +27,36 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         format: "EXR",
         source,
     })?;
+    decode_exr(&bytes, path)
+}
+
+/// [`read_exr`] for a file held in memory: `name` stands for the file in error messages.
+pub fn read_exr_bytes(bytes: &[u8], name: &str) -> Result<Image, ImageError> {
+    decode_exr(bytes, Path::new(name))
+}
+
+/// Most pixels [`read_exr`] accepts in the layer it reads: 2²⁸ = 16384 × 16384, the largest
+/// image the renderer writes. A header declaring more is refused before decoding.
+pub const MAX_EXR_PIXELS: u64 = 1 << 28;
+
+/// Files at least this large are decompressed in parallel (see [`decode_exr`]).
+pub(crate) const PARALLEL_EXR_BYTES: usize = 256 << 10;
+
+/// Decodes an OpenEXR file held in memory (see [`read_exr`]); `path` names it in errors.
+fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
     let decode_err = |e: exr::error::Error| ImageError::ExrDecode {
         path: path.to_path_buf(),
         reason: e.to_string(),
     };
 
     // Check the channels first so that a file without RGB gets a message listing what it has.
-    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes[..]), true)
-        .map_err(decode_err)?;
-    let has_rgb = meta.headers.iter().any(|h| {
+    let meta =
+        exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), true).map_err(decode_err)?;
+    let rgb_layer = meta.headers.iter().find(|h| {
         let has = |n: &str| h.channels.list.iter().any(|c| c.name.eq(n));
         has("R") && has("G") && has("B")
     });
-    if !has_rgb {
+    let Some(rgb_layer) = rgb_layer else {
         let found: Vec<String> = meta
             .headers
             .iter()
@@ -53,21 +70,50 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
                 found.join(", ")
             },
         });
+    };
+    // Refuse an absurd size from the header alone, before anything is allocated for it.
+    let size = rgb_layer.layer_size;
+    if size.width() as u64 * size.height() as u64 > MAX_EXR_PIXELS {
+        return Err(ImageError::ExrDecode {
+            path: path.to_path_buf(),
+            reason: format!(
+                "image size {}x{} is larger than the {MAX_EXR_PIXELS} pixels accepted",
+                size.width(),
+                size.height()
+            ),
+        });
     }
 
-    let image = x::read()
+    // The pixel buffer grows as decoded pixels arrive (rather than being allocated from the
+    // header's size up front), so a file that declares a large image but holds little or no
+    // pixel data fails before it costs memory.
+    let reader = x::read()
         .no_deep_data()
         .largest_resolution_level()
         .rgb_channels(
-            |size: x::Vec2<usize>, _| (size.width(), vec![Vec3::ZERO; size.area()]),
-            |(w, px): &mut (usize, Vec<Vec3>), pos: x::Vec2<usize>, (r, g, b): (f32, f32, f32)| {
-                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+            |size: x::Vec2<usize>, _| (size.width(), size.area(), Vec::new()),
+            |(w, _, px): &mut (usize, usize, Vec<Vec3>),
+             pos: x::Vec2<usize>,
+             (r, g, b): (f32, f32, f32)| {
+                let i = pos.y() * *w + pos.x();
+                if i >= px.len() {
+                    px.resize(i + 1, Vec3::ZERO);
+                }
+                px[i] = Vec3::new(r, g, b);
             },
         )
         .first_valid_layer()
         .all_attributes()
-        .pedantic()
-        .from_buffered(Cursor::new(&bytes[..]))
+        .pedantic();
+    // The exr crate builds a thread pool per file to decompress blocks in parallel; for a small
+    // file that costs more than it saves, so it is decoded on the calling thread.
+    let reader = if bytes.len() < PARALLEL_EXR_BYTES {
+        reader.non_parallel()
+    } else {
+        reader
+    };
+    let image = reader
+        .from_buffered(Cursor::new(bytes))
         .map_err(decode_err)?;
 
     let size = image.layer_data.size;
@@ -81,10 +127,12 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
             });
         }
     };
+    let (_, area, mut data) = image.layer_data.channel_data.pixels;
+    data.resize(area, Vec3::ZERO);
     let img = Image {
         width: w32,
         height: h32,
-        data: image.layer_data.channel_data.pixels.1,
+        data,
     };
     if let Some((px, py, v)) = img.first_non_finite() {
         return Err(ImageError::non_finite(path, px, py, v));
@@ -100,8 +148,20 @@ pub fn read_exr_size(path: &Path) -> Result<(u32, u32), ImageError> {
         format: "EXR",
         source,
     })?;
-    let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(file), true)
-        .map_err(|e| ImageError::ExrDecode {
+    size_from_header(std::io::BufReader::new(file), path)
+}
+
+/// [`read_exr_size`] for a file held in memory: `name` stands for the file in error messages.
+pub fn read_exr_size_bytes(bytes: &[u8], name: &str) -> Result<(u32, u32), ImageError> {
+    size_from_header(Cursor::new(bytes), Path::new(name))
+}
+
+fn size_from_header(
+    read: impl std::io::Read + std::io::Seek,
+    path: &Path,
+) -> Result<(u32, u32), ImageError> {
+    let meta =
+        exr::meta::MetaData::read_from_buffered(read, true).map_err(|e| ImageError::ExrDecode {
             path: path.to_path_buf(),
             reason: e.to_string(),
         })?;

@@ -29,7 +29,16 @@ pub fn read_hdr(path: &Path) -> Result<Image, ImageError> {
         format: "Radiance HDR",
         source,
     })?;
-    decode_hdr(&bytes).map_err(|reason| ImageError::HdrDecode {
+    read_hdr_bytes_at(&bytes, path)
+}
+
+/// [`read_hdr`] for a file held in memory: `name` stands for the file in error messages.
+pub fn read_hdr_bytes(bytes: &[u8], name: &str) -> Result<Image, ImageError> {
+    read_hdr_bytes_at(bytes, Path::new(name))
+}
+
+fn read_hdr_bytes_at(bytes: &[u8], path: &Path) -> Result<Image, ImageError> {
+    decode_hdr(bytes).map_err(|reason| ImageError::HdrDecode {
         path: path.to_path_buf(),
         reason,
     })
@@ -42,7 +51,16 @@ pub fn read_hdr_size(path: &Path) -> Result<(u32, u32), ImageError> {
         format: "Radiance HDR",
         source,
     })?;
-    parse_header(&bytes)
+    size_at(&bytes, path)
+}
+
+/// [`read_hdr_size`] for a file held in memory: `name` stands for the file in error messages.
+pub fn read_hdr_size_bytes(bytes: &[u8], name: &str) -> Result<(u32, u32), ImageError> {
+    size_at(bytes, Path::new(name))
+}
+
+fn size_at(bytes: &[u8], path: &Path) -> Result<(u32, u32), ImageError> {
+    parse_header(bytes)
         .map(|h| (h.width, h.height))
         .map_err(|reason| ImageError::HdrDecode {
             path: path.to_path_buf(),
@@ -133,7 +151,9 @@ pub fn decode_hdr(bytes: &[u8]) -> Result<Image, String> {
     let (w, ht) = (h.width as usize, h.height as usize);
     let mut data = &bytes[h.data..];
     let mut rgbe = vec![[0u8; 4]; w];
-    let mut out = Vec::with_capacity(w * ht);
+    // Reserve no more than the data could describe without runs: a header declaring a large
+    // image over a few bytes fails on its first scanlines, not after a huge allocation.
+    let mut out = Vec::with_capacity((w * ht).min(bytes.len()));
     for row in 0..ht {
         read_scanline(&mut data, &mut rgbe)
             .map_err(|e| format!("scanline {row} (of {ht}): {e}"))?;

@@ -1,7 +1,9 @@
 //! Linear RGB image buffers, EXR/PNG I/O and tonemapping.
 //!
-//! - [`read_exr`] / [`write_exr`]: linear float images (OpenEXR via the `exr` crate).
-//! - [`read_hdr`]: Radiance RGBE (`.hdr`) input, flat and run-length encoded.
+//! - [`read_exr`] / [`write_exr`]: linear float images (OpenEXR via the `exr` crate);
+//!   [`read_exr_bytes`] decodes one held in memory.
+//! - [`read_hdr`]: Radiance RGBE (`.hdr`) input, flat and run-length encoded;
+//!   [`read_hdr_bytes`] decodes one held in memory.
 //! - [`Tonemap`] / [`to_srgb8`]: exposure, a tone operator and the sRGB OETF to 8-bit display
 //!   values.
 //! - [`write_png`] / [`write_png_rgb8`]: 8-bit sRGB PNG output.
@@ -16,8 +18,14 @@ mod png_io;
 mod tonemap;
 
 pub use error::ImageError;
-pub use exr_io::{HALF_MAX, read_exr, read_exr_size, write_exr, write_exr_half};
-pub use hdr_io::{MAX_HDR_SIDE, decode_hdr, read_hdr, read_hdr_size, rgbe_to_rgb};
+pub use exr_io::{
+    HALF_MAX, MAX_EXR_PIXELS, read_exr, read_exr_bytes, read_exr_size, read_exr_size_bytes,
+    write_exr, write_exr_half,
+};
+pub use hdr_io::{
+    MAX_HDR_SIDE, decode_hdr, read_hdr, read_hdr_bytes, read_hdr_size, read_hdr_size_bytes,
+    rgbe_to_rgb,
+};
 pub use png_io::{write_png, write_png_rgb8};
 pub use tonemap::{ToneOperator, Tonemap, srgb_eotf, srgb_oetf, to_srgb8};
 

@@ -138,6 +138,12 @@ fn reads_f32_exr_with_other_compressions_and_tiles() {
             blocks: x::Blocks::ScanLines,
             line_order: x::LineOrder::Increasing,
         },
+        // Bottom rows first: the reader's pixel buffer grows to full size on the first block.
+        x::Encoding {
+            compression: x::Compression::ZIP1,
+            blocks: x::Blocks::ScanLines,
+            line_order: x::LineOrder::Decreasing,
+        },
     ]
     .into_iter()
     .enumerate()
@@ -154,6 +160,91 @@ fn reads_f32_exr_with_other_compressions_and_tiles() {
             .unwrap();
         assert_eq!(bits(&read_exr(&p).unwrap()), bits(&img), "encoding {enc:?}");
     }
+}
+
+#[test]
+fn small_and_large_exr_files_decode_alike() {
+    // Below PARALLEL_EXR_BYTES a file is decoded on the calling thread, above it in parallel.
+    let dir = tempfile::tempdir().unwrap();
+    for (w, h) in [(7, 5), (256, 256)] {
+        let p = dir.path().join(format!("{w}.exr"));
+        let img = varied_image(w, h);
+        write_exr(&p, &img).unwrap();
+        let len = std::fs::metadata(&p).unwrap().len() as usize;
+        assert_eq!(
+            len >= super::exr_io::PARALLEL_EXR_BYTES,
+            w == 256,
+            "{len} bytes"
+        );
+        assert_eq!(bits(&read_exr(&p).unwrap()), bits(&img), "{w}x{h}");
+    }
+}
+
+#[test]
+fn exr_bytes_read_like_the_file_and_huge_headers_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("a.exr");
+    let img = varied_image(5, 3);
+    write_exr(&p, &img).unwrap();
+    let bytes = std::fs::read(&p).unwrap();
+    assert_eq!(
+        bits(&read_exr_bytes(&bytes, "mem.exr").unwrap()),
+        bits(&read_exr(&p).unwrap())
+    );
+    assert_eq!(read_exr_size_bytes(&bytes, "mem.exr").unwrap(), (5, 3));
+
+    // The same header declaring a 2^28 × 3 data window (the offset table still matches: the
+    // height, hence the number of blocks, is unchanged). Refused before anything is decoded.
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
+    let mut huge = bytes.clone();
+    huge[at + 8..at + 12].copy_from_slice(&((1i32 << 28) - 1).to_le_bytes());
+    assert_eq!(
+        read_exr_size_bytes(&huge, "huge.exr").unwrap(),
+        (1 << 28, 3)
+    );
+    let msg = read_exr_bytes(&huge, "huge.exr").unwrap_err().to_string();
+    assert!(msg.contains("\"huge.exr\""), "{msg}");
+    assert!(
+        msg.contains("268435456x3 is larger than the 268435456 pixels"),
+        "{msg}"
+    );
+
+    // Truncated pixel data: an error, not a partly black image.
+    let msg = read_exr_bytes(&bytes[..bytes.len() - 10], "cut.exr")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("\"cut.exr\" is not a readable OpenEXR file"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn hdr_bytes_read_like_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("a.hdr");
+    let mut bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n".to_vec();
+    bytes.extend_from_slice(&[128, 64, 32, 129, 1, 2, 3, 130]);
+    std::fs::write(&p, &bytes).unwrap();
+    assert_eq!(
+        read_hdr_bytes(&bytes, "mem.hdr").unwrap(),
+        read_hdr(&p).unwrap()
+    );
+    assert_eq!(read_hdr_size_bytes(&bytes, "mem.hdr").unwrap(), (2, 1));
+    let msg = read_hdr_bytes(&bytes[..bytes.len() - 1], "cut.hdr")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("\"cut.hdr\" is not a readable Radiance HDR file"),
+        "{msg}"
+    );
+    assert!(msg.contains("truncated"), "{msg}");
+    // A header declaring the largest size over no data fails without a huge allocation.
+    let msg = read_hdr_bytes(b"#?RADIANCE\n\n-Y 32767 +X 32767\n", "big.hdr")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("scanline 0 (of 32767)"), "{msg}");
 }
 
 #[test]

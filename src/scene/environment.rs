@@ -333,14 +333,45 @@ fn extension(path: &Path) -> String {
 /// Reads a lat-long image, OpenEXR or Radiance RGBE by extension, refusing sizes above
 /// [`MAX_TEXELS`] from the header before decoding.
 pub fn read_latlong(path: &Path) -> Result<Image, EnvironmentError> {
+    latlong(
+        path,
+        || crate::image::read_exr_size(path),
+        || crate::image::read_hdr_size(path),
+        || crate::image::read_exr(path),
+        || crate::image::read_hdr(path),
+    )
+}
+
+/// [`read_latlong`] for a file held in memory: `name` stands for the file in error messages and
+/// its extension chooses the format.
+pub fn read_latlong_bytes(bytes: &[u8], name: &str) -> Result<Image, EnvironmentError> {
+    latlong(
+        Path::new(name),
+        || crate::image::read_exr_size_bytes(bytes, name),
+        || crate::image::read_hdr_size_bytes(bytes, name),
+        || crate::image::read_exr_bytes(bytes, name),
+        || crate::image::read_hdr_bytes(bytes, name),
+    )
+}
+
+type ImageResult<T> = Result<T, ImageError>;
+
+/// The extension dispatch and size check shared by [`read_latlong`] and [`read_latlong_bytes`].
+fn latlong(
+    path: &Path,
+    exr_size: impl FnOnce() -> ImageResult<(u32, u32)>,
+    hdr_size: impl FnOnce() -> ImageResult<(u32, u32)>,
+    exr: impl FnOnce() -> ImageResult<Image>,
+    hdr: impl FnOnce() -> ImageResult<Image>,
+) -> Result<Image, EnvironmentError> {
     let ext = extension(path);
     let invalid = |reason: String| EnvironmentError::Invalid {
         path: path.to_path_buf(),
         reason,
     };
     let (w, h) = match ext.as_str() {
-        "exr" => crate::image::read_exr_size(path)?,
-        "hdr" | "pic" => crate::image::read_hdr_size(path)?,
+        "exr" => exr_size()?,
+        "hdr" | "pic" => hdr_size()?,
         _ => {
             return Err(invalid(format!(
                 "unknown environment-map extension \"{ext}\": expected .exr (OpenEXR) or .hdr (Radiance RGBE)"
@@ -351,8 +382,8 @@ pub fn read_latlong(path: &Path) -> Result<Image, EnvironmentError> {
         return Err(invalid(too_large(w, h)));
     }
     Ok(match ext.as_str() {
-        "exr" => crate::image::read_exr(path)?,
-        _ => crate::image::read_hdr(path)?,
+        "exr" => exr()?,
+        _ => hdr()?,
     })
 }
 

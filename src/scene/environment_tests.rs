@@ -412,3 +412,31 @@ fn scaled_radiance_beyond_the_limit_is_refused() {
         Environment::from_image(Image::from_fn(8, 4, |_, _| Vec3::splat(1e10)), 0.0, 1e10).unwrap();
     assert!(ok.integrated_luminance().is_finite() && ok.integrated_luminance() > 0.0);
 }
+
+#[test]
+fn read_latlong_bytes_checks_extension_and_size_like_the_file_reader() {
+    // 4 x 2 flat RGBE texels.
+    let mut hdr = b"#?RADIANCE\n\n-Y 2 +X 4\n".to_vec();
+    hdr.extend(std::iter::repeat_n([128u8, 128, 128, 129], 8).flatten());
+    let img = read_latlong_bytes(&hdr, "sky.hdr").unwrap();
+    assert_eq!((img.width, img.height), (4, 2));
+    assert_eq!(img.get(3, 1), Vec3::splat(128.5 / 128.0));
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("sky.pic");
+    std::fs::write(&p, &hdr).unwrap();
+    assert_eq!(read_latlong(&p).unwrap(), img);
+
+    let msg = read_latlong_bytes(&hdr, "sky.png").unwrap_err().to_string();
+    assert!(
+        msg.starts_with("sky.png: unknown environment-map extension"),
+        "{msg}"
+    );
+    // Refused from the header, before decoding: 16384 x 8192 > MAX_TEXELS.
+    let msg = read_latlong_bytes(b"#?RADIANCE\n\n-Y 8192 +X 16384\n", "big.hdr")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.starts_with("big.hdr: the map is too large: 16384x8192"),
+        "{msg}"
+    );
+}

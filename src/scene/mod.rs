@@ -24,6 +24,11 @@ use std::path::{Path, PathBuf};
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_SEGMENTS: u32 = 65536;
 pub const MAX_SUBDIVISIONS: u32 = 4096;
+/// Most triangles a scene may have in all (procedural shapes and mesh files together): 2²⁴,
+/// about 16.8 million. A procedural shape is checked against it before it is generated, so a
+/// sphere with `segments = 65536` (4.3 billion triangles) is refused instead of exhausting
+/// memory; a plane may have up to 2896 subdivisions.
+pub const MAX_SCENE_TRIANGLES: u64 = 1 << 24;
 /// Upper bound on samples per pixel accepted from scene files and the command line.
 pub const MAX_SPP: u32 = 1 << 20;
 /// Largest accepted `visibility.shadow_map_resolution` (a point light's cube of 6 faces at this
@@ -375,7 +380,8 @@ impl Builder {
                         ),
                     )
                 })? as u32;
-            let (data, source) = self.shape(&field, &oname, &o.shape, &mut inputs)?;
+            let used = mesh.indices.len() as u64;
+            let (data, source) = self.shape(&field, &oname, &o.shape, &mut inputs, used)?;
             let xf = self.transform(&field, &o.transform)?;
             let first_tri = mesh.indices.len() as u32;
             let first_vertex = mesh.positions.len();
@@ -716,8 +722,27 @@ impl Builder {
         oname: &str,
         s: &ShapeSpec,
         inputs: &mut Vec<PathBuf>,
+        used: u64,
     ) -> Result<(MeshData, String), SceneError> {
         let sf = |x: &str| format!("{field}.shape.{x}");
+        // Refuses a shape that would take the scene past MAX_SCENE_TRIANGLES.
+        let budget = |what: &str, field: String, triangles: u64| {
+            if used + triangles > MAX_SCENE_TRIANGLES {
+                let before = if used > 0 {
+                    format!(" ({used} already used by earlier objects)")
+                } else {
+                    String::new()
+                };
+                return Err(self.err(
+                    field,
+                    format!(
+                        "{what} has {triangles} triangles; a scene may have at most \
+                         {MAX_SCENE_TRIANGLES} in all{before}"
+                    ),
+                ));
+            }
+            Ok(())
+        };
         Ok(match s {
             ShapeSpec::Mesh { file } => {
                 if file.trim().is_empty() {
@@ -739,6 +764,11 @@ impl Builder {
                         field: sf("file"),
                         source: Box::new(source),
                     })?;
+                budget(
+                    "the mesh (after cleaning)",
+                    sf("file"),
+                    data.indices.len() as u64,
+                )?;
                 let scene_file = self.path.display().to_string();
                 self.warnings.extend(
                     report
@@ -753,17 +783,28 @@ impl Builder {
                 self.positive(&sf("size[0]"), size[0])?;
                 self.positive(&sf("size[1]"), size[1])?;
                 self.count(&sf("subdivisions"), *subdivisions, 1, MAX_SUBDIVISIONS)?;
+                budget(
+                    &format!("a plane with {subdivisions} subdivisions"),
+                    sf("subdivisions"),
+                    shapes::plane_triangles(*subdivisions),
+                )?;
                 (shapes::plane(*size, *subdivisions), "plane".into())
             }
             ShapeSpec::Box { size } => {
                 for (k, v) in size.iter().enumerate() {
                     self.positive(&sf(&format!("size[{k}]")), *v)?;
                 }
+                budget("a box", sf("type"), shapes::CUBOID_TRIANGLES)?;
                 (shapes::cuboid(*size), "box".into())
             }
             ShapeSpec::Sphere { radius, segments } => {
                 self.positive(&sf("radius"), *radius)?;
                 self.count(&sf("segments"), *segments, 3, MAX_SEGMENTS)?;
+                budget(
+                    &format!("a sphere with {segments} segments"),
+                    sf("segments"),
+                    shapes::sphere_triangles(*segments),
+                )?;
                 (shapes::sphere(*radius, *segments), "sphere".into())
             }
             ShapeSpec::Ring {
@@ -776,6 +817,11 @@ impl Builder {
                 self.positive(&sf("height"), *height)?;
                 self.positive(&sf("thickness"), *thickness)?;
                 self.count(&sf("segments"), *segments, 3, MAX_SEGMENTS)?;
+                budget(
+                    &format!("a ring with {segments} segments"),
+                    sf("segments"),
+                    shapes::ring_triangles(*segments),
+                )?;
                 (
                     shapes::ring(*radius, *height, *thickness, *segments),
                     "ring".into(),

@@ -38,6 +38,27 @@ pub fn plane(size: [f32; 2], n: u32) -> MeshData {
     }
 }
 
+/// Number of triangles [`plane`] generates for `n` subdivisions (computed without generating).
+pub fn plane_triangles(n: u32) -> u64 {
+    let n = u64::from(n.max(1));
+    2 * n * n
+}
+
+/// Number of triangles [`cuboid`] generates.
+pub const CUBOID_TRIANGLES: u64 = 12;
+
+/// Number of triangles [`sphere`] generates for `segments` (computed without generating).
+pub fn sphere_triangles(segments: u32) -> u64 {
+    let seg = segments.max(3);
+    let rings = u64::from((seg / 2).max(2));
+    u64::from(seg) * (2 * rings - 2)
+}
+
+/// Number of triangles [`ring`] generates for `segments` (computed without generating).
+pub fn ring_triangles(segments: u32) -> u64 {
+    8 * u64::from(segments.max(3))
+}
+
 /// Axis-aligned box of the given size centred at the origin, flat-shaded.
 pub fn cuboid(size: [f32; 3]) -> MeshData {
     let h = Vec3::from(size) * 0.5;
@@ -182,6 +203,24 @@ pub fn ring(radius: f32, height: f32, thickness: f32, segments: u32) -> MeshData
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn triangle_counts_match_the_generated_shapes() {
+        for n in [1, 2, 3, 7, 64] {
+            assert_eq!(
+                plane([1.0, 2.0], n).indices.len() as u64,
+                plane_triangles(n)
+            );
+        }
+        assert_eq!(cuboid([1.0; 3]).indices.len() as u64, CUBOID_TRIANGLES);
+        for seg in [3, 4, 5, 8, 33, 256] {
+            assert_eq!(sphere(1.0, seg).indices.len() as u64, sphere_triangles(seg));
+            assert_eq!(
+                ring(1.0, 0.5, 0.1, seg).indices.len() as u64,
+                ring_triangles(seg)
+            );
+        }
+    }
 
     /// Winding agrees with the given normals: every face normal points the same way as its
     /// vertices' normals.

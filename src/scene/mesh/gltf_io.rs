@@ -18,6 +18,16 @@ use gltf::accessor::{DataType, Dimensions};
 
 use super::{MeshData, MeshError};
 
+/// Where a glTF's buffers may come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Buffers {
+    /// GLB binary chunk, data URIs and files relative to the glTF file (a file on disk).
+    Files,
+    /// GLB binary chunk and data URIs only (a glTF held in memory: there is no directory to
+    /// resolve relative URIs against).
+    Embedded,
+}
+
 fn gltf_err(path: &Path, detail: impl Into<String>) -> MeshError {
     MeshError::Gltf {
         path: path.to_path_buf(),
@@ -134,6 +144,7 @@ fn load_buffers(
     path: &Path,
     doc: &gltf::Document,
     mut blob: Option<&[u8]>,
+    sources: Buffers,
 ) -> Result<Vec<Vec<u8>>, MeshError> {
     let base = path.parent().unwrap_or(Path::new("."));
     let mut out = Vec::new();
@@ -166,6 +177,15 @@ fn load_buffers(
                         path: path.to_path_buf(),
                         detail: format!(
                             "buffer {i}: URI '{uri}' (only relative file paths and data URIs are supported)"
+                        ),
+                    });
+                }
+                if sources == Buffers::Embedded {
+                    return Err(MeshError::Unsupported {
+                        path: path.to_path_buf(),
+                        detail: format!(
+                            "buffer {i}: external URI '{uri}' (a glTF parsed from memory can only use \
+                             its GLB binary chunk and base64 data URIs)"
                         ),
                     });
                 }
@@ -505,21 +525,55 @@ fn visit_roots(
     Ok(())
 }
 
-fn parse_inner(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
+/// Parses and validates the JSON document.
+///
+/// The `gltf` crate's validation (gltf-json 1.4.1, `mesh.rs`, `primitive_validate_hook`) indexes
+/// the accessor array with each primitive's `POSITION` index before that index is checked, and
+/// panics when it is out of range (found by fuzzing: `tests/data/fuzz/gltf/position-accessor-
+/// out-of-range`). That index is therefore checked here first, on the unvalidated document.
+fn parse_document(path: &Path, json: &[u8]) -> Result<gltf::Document, MeshError> {
+    use gltf::json::mesh::Semantic;
+    use gltf::json::validation::Checked;
+
+    let unchecked = gltf::Gltf::from_slice_without_validation(json)
+        .map_err(|e| gltf_err(path, e.to_string()))?
+        .document
+        .into_json();
+    let accessors = unchecked.accessors.len();
+    for (m, mesh) in unchecked.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&Checked::Valid(Semantic::Positions))
+                && i.value() >= accessors
+            {
+                return Err(gltf_err(
+                    path,
+                    format!(
+                        "meshes[{m}].primitives[{p}].attributes[\"POSITION\"]: accessor {} does \
+                         not exist (there are {accessors} accessors)",
+                        i.value()
+                    ),
+                ));
+            }
+        }
+    }
+    gltf::Document::from_json(unchecked).map_err(|e| gltf_err(path, e.to_string()))
+}
+
+fn parse_inner(path: &Path, data: &[u8], sources: Buffers) -> Result<MeshData, MeshError> {
     let (json, blob) = if data.starts_with(b"glTF") {
         split_glb(path, data)?
     } else {
         (data, None)
     };
-    let gltf = gltf::Gltf::from_slice(json).map_err(|e| gltf_err(path, e.to_string()))?;
-    let doc = &gltf.document;
+    let doc = parse_document(path, json)?;
+    let doc = &doc;
     if let Some(ext) = doc.extensions_required().next() {
         return Err(MeshError::Unsupported {
             path: path.to_path_buf(),
             detail: format!("the file requires the glTF extension {ext}"),
         });
     }
-    let buffers = load_buffers(path, doc, blob)?;
+    let buffers = load_buffers(path, doc, blob, sources)?;
     let mut out = Merged {
         positions: Vec::new(),
         normals: Vec::new(),
@@ -566,10 +620,16 @@ fn parse_inner(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
     })
 }
 
-/// Parses a `.gltf` (JSON) or `.glb` (binary) file; external buffers are resolved relative to
-/// `path`'s directory.
-pub(super) fn parse_gltf(path: &Path, data: &[u8]) -> Result<MeshData, MeshError> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| parse_inner(path, data))) {
+/// Parses a `.gltf` (JSON) or `.glb` (binary) file; with [`Buffers::Files`], external buffers
+/// are resolved relative to `path`'s directory, with [`Buffers::Embedded`] they are an error.
+pub(super) fn parse_gltf(
+    path: &Path,
+    data: &[u8],
+    sources: Buffers,
+) -> Result<MeshData, MeshError> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        parse_inner(path, data, sources)
+    })) {
         Ok(result) => result,
         Err(panic) => {
             let msg = panic

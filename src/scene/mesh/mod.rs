@@ -282,16 +282,42 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
         path: path.to_path_buf(),
         error,
     })?;
+    parse_loaded(path, &raw, format, gz, gltf_io::Buffers::Files)
+}
+
+/// Parses a mesh held in memory, like [`load_mesh`] without the file system: `name` is used in
+/// error messages and its extension decides the format (`.ply`, `.ply.gz`, `.obj`, `.obj.gz`,
+/// `.gltf`, `.glb`).
+///
+/// A glTF read from memory can only use its GLB binary chunk and base64 `data:` URIs; a buffer
+/// that refers to an external file is an error naming the URI. Everything else (validation,
+/// transparent gzip, messages) is exactly as for [`load_mesh`].
+pub fn parse_mesh_bytes(bytes: &[u8], name: &str) -> Result<MeshData, MeshError> {
+    let path = Path::new(name);
+    let (format, gz) = format_of(path)?;
+    parse_loaded(path, bytes, format, gz, gltf_io::Buffers::Embedded)
+}
+
+/// The format-independent part of loading: transparent gzip, then the format's parser.
+fn parse_loaded(
+    path: &Path,
+    raw: &[u8],
+    format: Format,
+    gz: bool,
+    buffers: gltf_io::Buffers,
+) -> Result<MeshData, MeshError> {
     // A `.ply`/`.obj` that is really gzip-compressed is decompressed transparently.
-    let data = if gz || (format != Format::Gltf && raw.starts_with(&[0x1f, 0x8b])) {
-        gunzip(path, &raw)?
+    let gunzipped;
+    let data: &[u8] = if gz || (format != Format::Gltf && raw.starts_with(&[0x1f, 0x8b])) {
+        gunzipped = gunzip(path, raw)?;
+        &gunzipped
     } else {
         raw
     };
     let mesh = match format {
-        Format::Ply => ply::parse_ply(path, &data)?,
-        Format::Obj => obj::parse_obj(path, &data)?,
-        Format::Gltf => gltf_io::parse_gltf(path, &data)?,
+        Format::Ply => ply::parse_ply(path, data)?,
+        Format::Obj => obj::parse_obj(path, data)?,
+        Format::Gltf => gltf_io::parse_gltf(path, data, buffers)?,
     };
     debug_assert!(validate(&mesh, &path.display().to_string()).is_ok());
     Ok(mesh)

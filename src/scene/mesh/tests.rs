@@ -1188,7 +1188,7 @@ fn truncated_and_corrupted_files_never_panic() {
         let result = match name {
             "x.ply" => super::ply::parse_ply(path, data),
             "x.obj" => super::obj::parse_obj(path, data),
-            _ => super::gltf_io::parse_gltf(path, data),
+            _ => super::gltf_io::parse_gltf(path, data, super::gltf_io::Buffers::Embedded),
         };
         if let Ok(mesh) = result {
             validate(&mesh, "fuzz").expect("a loaded mesh must be valid");
@@ -1318,4 +1318,81 @@ fn convert_models() {
             std::fs::metadata(output).unwrap().len()
         );
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// parse_mesh_bytes
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn parse_mesh_bytes_agrees_with_load_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = ascii_ply("0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n", 4, 2);
+    let bin = triangle_buffer();
+    let embedded = format!(
+        r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#,
+        bin.len(),
+        base64(&bin)
+    );
+    let glb_json = triangle_gltf_json(&format!(r#"{{"byteLength": {}}}"#, bin.len()), 4);
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        ("a.ply", ply.as_bytes().to_vec()),
+        ("a.ply.gz", gzip(ply.as_bytes())),
+        ("gzipped-anyway.ply", gzip(ply.as_bytes())),
+        (
+            "a.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n".to_vec(),
+        ),
+        ("a.OBJ.GZ", gzip(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n")),
+        ("a.gltf", triangle_gltf_json(&embedded, 4).into_bytes()),
+        ("a.glb", glb(&glb_json, Some(&bin))),
+    ];
+    for (name, bytes) in cases {
+        let path = write_file(dir.path(), name, &bytes);
+        let from_file = load_mesh(&path).unwrap();
+        let from_bytes = parse_mesh_bytes(&bytes, name).unwrap();
+        assert_eq!(from_file, from_bytes, "{name}");
+    }
+}
+
+#[test]
+fn parse_mesh_bytes_errors_name_the_input() {
+    let cases: &[(&str, &[u8], &str)] = &[
+        ("m.stl", b"solid", "unknown mesh file extension"),
+        (
+            "m.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 3\n",
+            "truncated",
+        ),
+        ("m.ply.gz", b"not gzip", "gzip"),
+        ("m.obj", b"v 0 0 0\nf 1 2 3\n", "out of range"),
+        ("m.glb", b"glTF\x02\0\0\0", "GLB header"),
+    ];
+    for (name, bytes, needle) in cases {
+        let msg = parse_mesh_bytes(bytes, name).unwrap_err().to_string();
+        assert!(msg.starts_with(name), "{msg}");
+        assert!(msg.contains(needle), "{needle:?} not in {msg}");
+    }
+}
+
+#[test]
+fn parse_mesh_bytes_refuses_external_gltf_buffers() {
+    let bin = triangle_buffer();
+    let external = format!(
+        r#"{{"byteLength": {}, "uri": "tri%20data.bin"}}"#,
+        bin.len()
+    );
+    let json = triangle_gltf_json(&external, 4);
+    let msg = parse_mesh_bytes(json.as_bytes(), "scene/x.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.starts_with("scene/x.gltf: unsupported: buffer 0"),
+        "{msg}"
+    );
+    assert!(msg.contains("external URI 'tri%20data.bin'"), "{msg}");
+    assert!(
+        msg.contains("GLB binary chunk and base64 data URIs"),
+        "{msg}"
+    );
 }
