@@ -1,5 +1,6 @@
 //! Known-answer tests of the reference renderer: closed-form direct light, a numerically
-//! integrated one-bounce configuration, and thread-count independence.
+//! integrated one-bounce configuration, and thread-count independence; and the determinism of
+//! every method through the command line (bit-identical for 1 and 2 threads and across runs).
 
 use glam::{DVec3, Vec3};
 use interreflect::accel::Accel;
@@ -850,4 +851,244 @@ fn reference_with_environment_is_bit_identical_for_one_and_two_threads() {
             .collect::<Vec<_>>()
     };
     assert_eq!(bits(&a), bits(&b));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Determinism of every method through the command line: 1 thread, 2 threads, and 2 threads
+// again (a second run with the same seed) write byte-identical EXR files.
+
+/// Glossy and diffuse surfaces facing each other, a tessellated floor (so the SG tree, the PRT
+/// vertices and the shadow maps have work to split over threads), a point light, a directional
+/// light and an environment map: every method has something to render, prt included. sg takes
+/// 2 samples per pixel, at keyed random positions (not a square number), so its seed matters;
+/// its cut is capped (threshold 5 %, 64 nodes) to keep each run well under a second.
+const DETERMINISM: &str = r#"
+[camera]
+position = [1.8, 1.3, 1.9]
+look_at = [0.2, 0.25, 0.3]
+fov_y = 45.0
+width = 32
+height = 24
+[[lights]]
+type = "point"
+position = [0.7, 1.2, 0.6]
+intensity = [2.0, 1.8, 1.5]
+[[lights]]
+type = "directional"
+direction = [-0.4, -1.0, -0.3]
+irradiance = [0.8, 0.8, 0.9]
+[environment]
+file = "sky.exr"
+[render]
+spp = 4
+[methods.sg]
+spp = 2
+max_edge = 0.5
+threshold = 0.05
+max_cut = 64
+[methods.prt]
+order = 4
+samples = 64
+[visibility]
+shadow_map_resolution = 64
+vpl_count = 16
+ism_resolution = 16
+ism_points = 4000
+[materials.floor]
+model = "lambert"
+diffuse = [0.7, 0.6, 0.5]
+[materials.wall]
+model = "cook_torrance"
+diffuse = [0.3, 0.3, 0.3]
+specular = [0.5, 0.5, 0.5]
+roughness = 0.2
+distribution = "ggx"
+[materials.ball]
+model = "phong"
+diffuse = [0.2, 0.4, 0.2]
+specular = [0.6, 0.5, 0.6]
+exponent = 80.0
+[[objects]]
+name = "floor"
+material = "floor"
+shape = { type = "plane", size = [2.0, 2.0], subdivisions = 4 }
+transform = { translate = [0.5, 0.0, 0.5] }
+[[objects]]
+name = "wall"
+material = "wall"
+shape = { type = "plane", size = [2.0, 1.0], subdivisions = 2 }
+transform = { rotate = [0.0, 0.0, -90.0], translate = [-0.5, 0.5, 0.5] }
+[[objects]]
+name = "ball"
+material = "ball"
+shape = { type = "sphere", radius = 0.25, segments = 12 }
+transform = { translate = [0.5, 0.25, 0.5] }
+"#;
+
+/// A temporary directory holding the determinism scene and its sky, and a private
+/// `XDG_RUNTIME_DIR` (mode 700) for the runs that open the GPU.
+struct Runs {
+    dir: tempfile::TempDir,
+    xdg: tempfile::TempDir,
+}
+
+impl Runs {
+    fn new() -> Runs {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("scene.toml"), DETERMINISM).unwrap();
+        let sky = Image::from_fn(16, 8, |x, y| {
+            Vec3::new(0.3 + 0.02 * x as f32, 0.4, 0.6 - 0.05 * y as f32)
+        });
+        interreflect::image::write_exr(&dir.path().join("sky.exr"), &sky).unwrap();
+        let xdg = tempfile::tempdir().unwrap();
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(xdg.path(), std::fs::Permissions::from_mode(0o700)).unwrap();
+        Runs { dir, xdg }
+    }
+
+    /// `render scene.toml --quiet --threads T --output NAME.exr ARGS`, in the directory (so the
+    /// prt cache, if any, stays there); the EXR's bytes, or the status and stderr.
+    fn render(&self, name: &str, threads: u32, args: &[&str]) -> Result<Vec<u8>, String> {
+        let out = self.dir.path().join(format!("{name}.exr"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
+            .current_dir(self.dir.path())
+            .env("XDG_RUNTIME_DIR", self.xdg.path())
+            .args(["render", "scene.toml", "--quiet", "--threads"])
+            .arg(threads.to_string())
+            .arg("--output")
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap();
+        if o.status.code() != Some(0) {
+            return Err(format!(
+                "status {:?}: {}",
+                o.status.code(),
+                String::from_utf8_lossy(&o.stderr)
+            ));
+        }
+        Ok(std::fs::read(&out).unwrap())
+    }
+
+    /// The three runs of one configuration, checked identical; returns the image.
+    fn check(&self, label: &str, args: &[&str]) -> Image {
+        let key = label.replace([' ', ','], "_");
+        let one = self.render(&format!("{key}_t1"), 1, args).unwrap();
+        let two = self.render(&format!("{key}_t2"), 2, args).unwrap();
+        let again = self.render(&format!("{key}_t2_again"), 2, args).unwrap();
+        let img = self.decode(&format!("{key}_t1"));
+        assert_same(
+            label,
+            "1 and 2 threads",
+            &one,
+            &two,
+            || self.decode(&format!("{key}_t2")),
+            &img,
+        );
+        assert_same(
+            label,
+            "two runs with 2 threads",
+            &two,
+            &again,
+            || self.decode(&format!("{key}_t2_again")),
+            &img,
+        );
+        img
+    }
+
+    fn decode(&self, name: &str) -> Image {
+        interreflect::image::read_exr(&self.dir.path().join(format!("{name}.exr"))).unwrap()
+    }
+}
+
+/// Byte-identical EXR files; on a difference, names the first differing pixel.
+fn assert_same(
+    label: &str,
+    what: &str,
+    a: &[u8],
+    b: &[u8],
+    decode_b: impl Fn() -> Image,
+    img_a: &Image,
+) {
+    if a == b {
+        return;
+    }
+    let img_b = decode_b();
+    let first = img_a
+        .data
+        .iter()
+        .zip(&img_b.data)
+        .position(|(p, q)| p.to_array().map(f32::to_bits) != q.to_array().map(f32::to_bits));
+    match first {
+        Some(i) => panic!(
+            "{label}: {what} differ, first at pixel ({}, {}): {} vs {}",
+            i as u32 % img_a.width,
+            i as u32 / img_a.width,
+            img_a.data[i],
+            img_b.data[i]
+        ),
+        None => panic!("{label}: {what}: same pixels but different EXR bytes"),
+    }
+}
+
+/// Every CPU method, each visibility of sg, both cut modes and prt relit on the CPU: identical
+/// bytes for 1 and 2 threads and for a second run; and a different seed changes every image
+/// (each method draws random numbers: sample positions, light and BRDF samples, VPLs, PRT's ray
+/// directions), so the runs compared do use the seed, and none is black.
+#[test]
+fn every_method_is_bit_identical_across_threads_and_runs() {
+    let runs = Runs::new();
+    let configs: [(&str, &[&str]); 9] = [
+        ("reference", &["--method", "reference"]),
+        ("direct", &["--method", "direct"]),
+        ("sg exact", &["--method", "sg"]),
+        ("sg vertex cuts", &["--method", "sg", "--cut", "vertex"]),
+        ("sg vsm", &["--method", "sg", "--visibility", "vsm"]),
+        ("sg approx", &["--method", "sg", "--visibility", "approx"]),
+        ("sg-brute", &["--method", "sg-brute"]),
+        (
+            "sg-brute vsm",
+            &["--method", "sg-brute", "--visibility", "vsm"],
+        ),
+        (
+            "prt cpu",
+            &["--method", "prt", "--device", "cpu", "--no-cache"],
+        ),
+    ];
+    for (label, args) in configs {
+        let img = runs.check(label, args);
+        assert!(
+            img.data.iter().filter(|p| p.max_element() > 0.0).count() > img.data.len() / 2,
+            "{label}: the image is mostly black"
+        );
+        let mut other: Vec<&str> = args.to_vec();
+        other.extend_from_slice(&["--seed", "12345"]);
+        let key = label.replace([' ', ','], "_");
+        let a = runs.render(&format!("{key}_t1"), 2, args).unwrap();
+        let b = runs.render(&format!("{key}_seed"), 2, &other).unwrap();
+        assert_ne!(a, b, "{label}: --seed changes nothing");
+    }
+}
+
+/// prt relit on the GPU is deterministic per device (it may differ from the CPU by fused
+/// multiply-adds, so it is compared with itself only): 1 and 2 threads and a second run give
+/// identical bytes. Skipped without an adapter, unless CI=true requires one.
+#[test]
+fn prt_on_the_gpu_is_bit_identical_across_threads_and_runs() {
+    let runs = Runs::new();
+    let args = ["--method", "prt", "--device", "gpu", "--no-cache"];
+    if let Err(e) = runs.render("probe", 1, &args) {
+        if interreflect::render::gpu::adapter_required() {
+            panic!("CI=true requires a GPU adapter: {e}");
+        }
+        eprintln!("skipped (no GPU adapter): {e}");
+        return;
+    }
+    let img = runs.check("prt gpu", &args);
+    assert!(img.data.iter().any(|p| p.max_element() > 0.0));
+    let log = std::fs::read_to_string(runs.dir.path().join("prt_gpu_t1.json")).unwrap();
+    assert!(
+        log.contains("\"relight_device\": \"gpu\""),
+        "not relit on the GPU:\n{log}"
+    );
 }
