@@ -31,6 +31,7 @@
 //! are otherwise clamped into 1..=[`MAX_ORDER`]. Slices shorter than the order needs are
 //! handled without panicking (missing coefficients count as 0, extra outputs are not written).
 
+use super::gauss_legendre;
 use glam::{DMat3, DVec3, Mat3, Vec3};
 use std::f64::consts::PI;
 use std::sync::LazyLock;
@@ -382,35 +383,6 @@ pub fn eval_rgb(order: u32, coeffs: &[Vec3], d: Vec3) -> Vec3 {
         .zip(&y[..n * n])
         .fold(DVec3::ZERO, |acc, (c, yi)| acc + c.as_dvec3() * *yi)
         .as_vec3()
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton iteration on P_n; Press et al. §4.5),
-/// exact for polynomials of degree ≤ 2n − 1.
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    let mut out = vec![(0.0, 0.0); n];
-    for i in 0..n.div_ceil(2) {
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            // p0 = P_n(x), p1 = P_{n−1}(x).
-            let (mut p0, mut p1) = (1.0f64, 0.0f64);
-            for j in 0..n {
-                let p2 = p1;
-                p1 = p0;
-                p0 = ((2 * j + 1) as f64 * x * p1 - j as f64 * p2) / (j + 1) as f64;
-            }
-            dp = n as f64 * (x * p0 - p1) / (x * x - 1.0);
-            let dx = p0 / dp;
-            x -= dx;
-            if dx.abs() < 1e-15 {
-                break;
-            }
-        }
-        let w = 2.0 / ((1.0 - x * x) * dp * dp);
-        out[i] = (-x, w);
-        out[n - 1 - i] = (x, w);
-    }
-    out
 }
 
 /// Product quadrature over the sphere: `nz` Gauss–Legendre nodes in z = cos θ times `nphi`

@@ -5,32 +5,7 @@
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton iteration on P_n; Press et al. §4.5).
-pub(crate) fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    let mut out = vec![(0.0, 0.0); n];
-    for i in 0..n.div_ceil(2) {
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0f64, 0.0f64);
-            for j in 0..n {
-                let p2 = p1;
-                p1 = p0;
-                p0 = ((2 * j + 1) as f64 * x * p1 - j as f64 * p2) / (j + 1) as f64;
-            }
-            dp = n as f64 * (x * p0 - p1) / (x * x - 1.0);
-            let dx = p0 / dp;
-            x -= dx;
-            if dx.abs() < 1e-15 {
-                break;
-            }
-        }
-        let w = 2.0 / ((1.0 - x * x) * dp * dp);
-        out[i] = (-x, w);
-        out[n - 1 - i] = (x, w);
-    }
-    out
-}
+pub(crate) use crate::math::gauss_legendre;
 
 /// Gauss–Legendre order of every panel.
 const ORDER: usize = 6;
