@@ -19,6 +19,7 @@
 //! - [`image`]: image buffers, EXR/PNG I/O, tonemapping.
 //! - [`compare`]: error metrics and false-colour error maps.
 //! - [`fsutil`]: atomic output files.
+//! - [`memory`]: the memory budget and the estimate of a render's peak memory.
 #![forbid(unsafe_code)]
 // `!(x > 0.0)` is written on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -30,6 +31,7 @@ pub mod cut;
 pub mod fsutil;
 pub mod image;
 pub mod math;
+pub mod memory;
 pub mod precompute;
 pub mod render;
 pub mod scene;

@@ -412,6 +412,27 @@ fn mesh_files() {
         .scene(&mesh_scene(""))
         .check("mesh_empty_file_name", RENDER, Expect::Refused);
 
+    // A binary PLY of 200k vertices and 400k (degenerate) faces, 7.6 MB: with a 32 MiB budget it
+    // is refused from its header, before it is loaded, naming the mesh's field.
+    let c = Case::new();
+    let mut big = PLY_HEAD
+        .replace("ascii", "binary_little_endian")
+        .replace("vertex 3", "vertex 200000")
+        .replace("face 1", "face 400000")
+        .into_bytes();
+    big.resize(big.len() + 200_000 * 12, 0);
+    for _ in 0..400_000 {
+        big.extend_from_slice(&[3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+    }
+    c.file("models/big.ply", &big);
+    let mut args = RENDER.to_vec();
+    args.extend_from_slice(&["--memory-budget", "32MiB"]);
+    c.scene(&mesh_scene("models/big.ply")).check(
+        "mesh_over_the_memory_budget",
+        &args,
+        Expect::Refused,
+    );
+
     let mut binary = PLY_HEAD
         .replace("ascii", "binary_little_endian")
         .into_bytes();
@@ -925,7 +946,7 @@ fn output_paths() {
 
 #[test]
 fn command_line_arguments() {
-    let cases: [(&str, &[&str]); 28] = [
+    let cases: [(&str, &[&str]); 32] = [
         ("cli_unknown_flag", &["--frobnicate"]),
         ("cli_unknown_flag_close_to_a_known_one", &["--thread", "2"]),
         ("cli_flag_without_value", &["--spp"]),
@@ -999,6 +1020,14 @@ fn command_line_arguments() {
             &["--method", "prt", "--window", "hamming"],
         ),
         ("cli_exposure_nan", &["--exposure", "nan"]),
+        // The scene (a plane and a light) needs about 20 MiB: refused before loading.
+        ("cli_memory_budget_exceeded", &["--memory-budget", "1MiB"]),
+        ("cli_memory_budget_not_a_size", &["--memory-budget", "lots"]),
+        (
+            "cli_memory_budget_unknown_unit",
+            &["--memory-budget", "4parsecs"],
+        ),
+        ("cli_memory_budget_zero", &["--memory-budget", "0"]),
     ];
     for (name, extra) in cases {
         let mut args = vec![

@@ -99,3 +99,56 @@ fn a_binding_over_the_device_limit_is_an_error_not_a_panic() {
     eprintln!("{err}");
     assert!(err.to_string().contains("PRT relighting"), "{err}");
 }
+
+/// No adapter (simulated with `WGPU_BACKEND=dx12`, a backend wgpu is not built with on this
+/// platform, so wgpu finds no adapter): `--device gpu` fails at once — before the transfer is
+/// computed — with a message saying what to install or which flag to use, and writes nothing;
+/// `--device auto` says in one line that it relights on the CPU, and renders.
+#[test]
+fn no_adapter_fails_clearly_or_falls_back_to_the_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/prt/ring-diffuse-env.toml"
+    );
+    let run = |device: &str, quiet: bool| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
+            .args(["render", scene, "--method", "prt", "--device", device])
+            .args(["--width", "16", "--transfer", "unshadowed", "--output"])
+            .arg(dir.path().join(format!("{device}.exr")))
+            .arg("--prt-cache")
+            .arg(dir.path().join(format!("cache-{device}")))
+            .args(quiet.then_some("--quiet"))
+            .env("WGPU_BACKEND", "dx12")
+            .env("XDG_RUNTIME_DIR", dir.path())
+            .output()
+            .unwrap()
+    };
+    // Had the device been opened after the transfer was computed, the transfer would be in the
+    // cache (and the log would say "prt: transfer computed ..., cached in ...").
+    let gpu = run("gpu", false);
+    let stderr = String::from_utf8_lossy(&gpu.stderr);
+    assert_eq!(gpu.status.code(), Some(2), "{stderr}");
+    let last = stderr.lines().last().unwrap_or_default();
+    assert!(last.starts_with("error: no GPU adapter found"), "{stderr}");
+    assert!(last.contains("--device cpu"), "{stderr}");
+    assert!(last.contains("mesa-vulkan-drivers"), "{stderr}");
+    assert!(!stderr.contains("prt: transfer"), "{stderr}");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+
+    let auto = run("auto", true);
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert_eq!(auto.status.code(), Some(0), "{stderr}");
+    let notices: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("notice:"))
+        .collect();
+    assert_eq!(notices.len(), 1, "{stderr}");
+    assert!(
+        notices[0].starts_with("notice: relighting on the CPU: no GPU adapter found"),
+        "{stderr}"
+    );
+    assert!(dir.path().join("auto.exr").is_file());
+    assert!(dir.path().join("cache-auto").is_dir());
+}

@@ -136,6 +136,20 @@ pub fn render(
     };
     let mut secs = PrtTimings::default();
 
+    // The device is opened first, so that `--device gpu` without an adapter fails before the
+    // transfer is computed.
+    let gpu = match args.device {
+        Device::Cpu => None,
+        Device::Gpu => Some(Gpu::new()?),
+        Device::Auto => match Gpu::new() {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("notice: relighting on the CPU: {e}");
+                None
+            }
+        },
+    };
+
     let t = Instant::now();
     let cache_dir = (!args.no_cache).then_some(args.prt_cache.as_path());
     let result = progress::run(work_units(scene, &opts), args.quiet, |prog| {
@@ -192,17 +206,6 @@ pub fn render(
             .zip(&transfer.bounce)
             .map(|(a, b)| *a + *b)
             .collect()
-    };
-    let gpu = match args.device {
-        Device::Cpu => None,
-        Device::Gpu => Some(Gpu::new()?),
-        Device::Auto => match Gpu::new() {
-            Ok(g) => Some(g),
-            Err(e) => {
-                eprintln!("notice: relighting on the CPU: {e}");
-                None
-            }
-        },
     };
     // Relit RELIGHTS times (the lighting of an interactive session changes every frame); the
     // log keeps the fastest, the steady-state cost of one relighting.

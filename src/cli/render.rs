@@ -6,15 +6,17 @@ use interreflect::accel::Accel;
 use interreflect::cut::CutOptions;
 use interreflect::fsutil::same_file;
 use interreflect::image::{Tonemap, write_exr, write_png};
+use interreflect::memory::{self, Budget, Workload};
 use interreflect::precompute::prt::{TransferKind, WindowKind};
 use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
 use interreflect::render::cpu::{RenderOptions, render};
 use interreflect::render::{Device, Method, Visibility};
-use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, Scene};
+use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, RenderSettings, Scene, ScenePreview};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -99,6 +101,11 @@ pub struct RenderArgs {
     /// prt: neither read nor write the transfer cache.
     #[arg(long)]
     pub no_cache: bool,
+    /// Refuse, before loading the meshes, a render whose estimated peak memory exceeds this
+    /// size (e.g. 4GiB, 512MiB; "off" = no check). Default: INTERREFLECT_MEMORY_BUDGET, or 75 %
+    /// of the physical memory.
+    #[arg(long, value_name = "SIZE")]
+    pub memory_budget: Option<String>,
 }
 
 /// The JSON log written beside the image.
@@ -122,6 +129,17 @@ struct RenderLog<'a> {
     sg: Option<SgLog>,
     #[serde(skip_serializing_if = "Option::is_none")]
     prt: Option<super::prt::PrtLog>,
+    memory: MemoryLog,
+}
+
+/// The memory estimate checked against the budget (`interreflect::memory`).
+#[derive(Serialize)]
+struct MemoryLog {
+    estimate_bytes: u64,
+    /// `None` when the budget is off.
+    budget_bytes: Option<u64>,
+    /// The estimate's parts, in bytes.
+    estimate: std::collections::BTreeMap<&'static str, u64>,
 }
 
 /// Reference-renderer fields of the log.
@@ -161,9 +179,10 @@ struct Timings {
 /// Largest accepted `--exposure`, in stops either way (2⁶⁴ is far past any image).
 const MAX_EXPOSURE: f32 = 64.0;
 
-fn resolve_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> {
-    let (cw, ch) = (scene.camera.width, scene.camera.height);
-    let (w, h) = match (args.width, args.height) {
+/// Image size from the flags and the camera's size, unchecked.
+fn requested_size(args: &RenderArgs, cw: u32, ch: u32) -> (u32, u32) {
+    let (cw, ch) = (cw.max(1), ch.max(1));
+    match (args.width, args.height) {
         (Some(w), Some(h)) => (w, h),
         (Some(w), None) => (
             w,
@@ -174,7 +193,11 @@ fn resolve_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> 
             h,
         ),
         (None, None) => (cw, ch),
-    };
+    }
+}
+
+fn resolve_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = requested_size(args, scene.camera.width, scene.camera.height);
     for (name, v) in [("--width", w), ("--height", h)] {
         if v == 0 || v > MAX_IMAGE_SIDE {
             bail!("{name} must be between 1 and {MAX_IMAGE_SIDE}, got {v}");
@@ -257,7 +280,28 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             args.exposure
         );
     }
-    let scene = Scene::load(&args.scene)?;
+    // Ctrl-C from here on sets a flag that every stage polls: an interrupted render exits
+    // with 130 and writes nothing (outputs are written only after the last check).
+    let cancel = progress::interrupt_flag();
+    let budget = Budget::resolve(args.memory_budget.as_deref()).map_err(anyhow::Error::msg)?;
+    let method = method_name(args.method);
+    let scene = Scene::load_checked(
+        &args.scene,
+        Some(&mut |p: &ScenePreview| {
+            let (w, h) = requested_size(&args, p.camera_width, p.camera_height);
+            let load = workload(
+                &args,
+                &p.settings,
+                p.triangles,
+                p.vertices,
+                w as u64 * h as u64,
+                p.environment_texels,
+                p.lights,
+            );
+            let what = memory::describe_workload(&load, method, w, h);
+            budget.check(&memory::estimate(&load), &what)
+        }),
+    )?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -284,6 +328,28 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let seed = args.seed.unwrap_or(scene.settings.seed);
     let (width, height) = resolve_size(&args, &scene)?;
     let out = output_path(&args, &scene)?;
+    // The check again with the loaded sizes (polygons, glTF meshes, the image size as resolved),
+    // before the BVH is built.
+    let load = workload(
+        &args,
+        &scene.settings,
+        scene.mesh.indices.len() as u64,
+        scene.mesh.positions.len() as u64,
+        width as u64 * height as u64,
+        scene
+            .environment
+            .as_ref()
+            .map(|e| e.width() as u64 * e.height() as u64)
+            .unwrap_or(0),
+        scene.lights.len(),
+    );
+    let estimate = memory::estimate(&load);
+    if let Err(m) = budget.check(
+        &estimate,
+        &memory::describe_workload(&load, method, width, height),
+    ) {
+        bail!("{}: {m}", scene.path.display());
+    }
     let r = scene.settings.reference;
     let sgs = scene.settings.sg;
     let cut = CutOptions {
@@ -348,9 +414,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         threads
     ));
 
+    if cancel.load(Ordering::SeqCst) {
+        return Ok(interrupted());
+    }
     let t = Instant::now();
     let accel = pool.install(|| Accel::build(&scene.mesh.positions, &scene.mesh.indices));
     times.bvh = t.elapsed().as_secs_f64();
+    if cancel.load(Ordering::SeqCst) {
+        return Ok(interrupted());
+    }
     if let Some(w) = camera_inside_geometry(&scene, &accel) {
         eprintln!("warning: {}: {w}", scene.path.display());
     }
@@ -456,6 +528,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     };
     let (img, reference_log, sg_log, prt_log, nonfinite) = rendered;
     times.render = t.elapsed().as_secs_f64();
+    // The last check: once writing starts, all three outputs are written (each atomically).
+    if cancel.load(Ordering::SeqCst) {
+        return Ok(interrupted());
+    }
     if nonfinite > 0 {
         eprintln!("warning: {nonfinite} samples were not finite and were dropped");
     }
@@ -501,6 +577,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         reference: reference_log,
         sg: sg_log,
         prt: prt_log,
+        memory: MemoryLog {
+            estimate_bytes: estimate.total(),
+            budget_bytes: budget.bytes,
+            estimate: estimate.parts.iter().map(|&(n, b)| (n, b)).collect(),
+        },
     };
     let text = serde_json::to_string_pretty(&log_data)? + "\n";
     if let Err(e) = interreflect::fsutil::write_bytes_atomic(&json, text.as_bytes()) {
@@ -529,6 +610,65 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         times.load, times.bvh, times.render, times.write, times.total
     ));
     Ok(0)
+}
+
+/// The `--method` value as typed.
+fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Reference => "reference",
+        Method::Direct => "direct",
+        Method::Sg => "sg",
+        Method::SgBrute => "sg-brute",
+        Method::Prt => "prt",
+    }
+}
+
+/// What the memory estimate needs, from the flags and the scene's settings. Values that are
+/// validated later (order, image size) are clamped here so that a bad one is reported by its
+/// own check, not as a huge estimate.
+fn workload(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    triangles: u64,
+    vertices: u64,
+    pixels: u64,
+    environment_texels: u64,
+    lights: usize,
+) -> Workload {
+    let side = MAX_IMAGE_SIDE as u64;
+    let pixels = pixels.min(side * side);
+    let spp = args
+        .spp
+        .unwrap_or(match args.method {
+            Method::Sg | Method::SgBrute => settings.sg.spp,
+            Method::Prt => settings.prt.spp,
+            _ => settings.spp,
+        })
+        .clamp(1, MAX_SPP) as u64;
+    let cut_mode = args.cut.unwrap_or(settings.sg.cut);
+    let max_cut = args.max_cut.unwrap_or(settings.sg.max_cut);
+    Workload {
+        method: args.method,
+        visibility: args.visibility,
+        triangles,
+        vertices,
+        pixels,
+        samples: pixels * spp,
+        environment_texels,
+        vertex_cut_nodes: (args.method == Method::Sg && cut_mode == CutMode::Vertex).then_some(
+            if max_cut == 0 {
+                interreflect::cut::DEFAULT_MAX_CUT as u64
+            } else {
+                max_cut as u64
+            },
+        ),
+        prt_order: args
+            .order
+            .unwrap_or(settings.prt.order)
+            .clamp(1, interreflect::math::sh::MAX_ORDER) as u64,
+        prt_gpu: args.device != Device::Cpu,
+        lights: lights as u64,
+    }
 }
 
 /// Reports an interrupted render (nothing written) and returns its exit status.

@@ -183,6 +183,31 @@ pub struct RenderSettings {
     pub prt: PrtSpec,
 }
 
+/// What a scene will hold, known before its meshes are loaded: shape sizes come from their
+/// parameters, mesh sizes from [`mesh::peek_counts`] (a PLY header, a pass over an OBJ).
+#[derive(Clone, Debug)]
+pub struct ScenePreview {
+    pub camera_width: u32,
+    pub camera_height: u32,
+    pub settings: RenderSettings,
+    /// Point, spot and directional lights.
+    pub lights: usize,
+    /// Texels of the environment map (already loaded), 0 without one.
+    pub environment_texels: u64,
+    /// Triangles and vertices of every object whose size is known.
+    pub triangles: u64,
+    pub vertices: u64,
+    /// Mesh files whose size cannot be known without loading them (glTF/GLB, unreadable files):
+    /// the check after loading covers them.
+    pub unknown: Vec<String>,
+    /// The field of the object with the most triangles (`objects[i].shape.file` for a mesh).
+    pub largest_field: String,
+}
+
+/// A check run on a [`ScenePreview`] before the meshes are loaded; `Err(message)` refuses the
+/// scene.
+pub type PreviewCheck<'a> = &'a mut dyn FnMut(&ScenePreview) -> Result<(), String>;
+
 /// A loaded, validated scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -207,20 +232,37 @@ pub struct Scene {
 impl Scene {
     /// Loads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Scene::load_checked(path, None)
+    }
+
+    /// Loads a scene like [`Scene::load`], calling `check` with a [`ScenePreview`] after the
+    /// settings are validated and before any mesh is loaded; an `Err(message)` from it stops
+    /// loading with an error naming the scene file and its largest object (this is how
+    /// `render` refuses a scene over its memory budget up front).
+    pub fn load_checked(path: &Path, check: Option<PreviewCheck>) -> Result<Scene, SceneError> {
         let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        Scene::from_str_at(&text, path)
+        Scene::from_str_checked(&text, path, check)
     }
 
     /// Parses scene text; `path` names the file in messages and anchors relative mesh paths.
     pub fn from_str_at(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        Scene::from_str_checked(text, path, None)
+    }
+
+    /// [`Scene::from_str_at`] with a [`PreviewCheck`] (see [`Scene::load_checked`]).
+    pub fn from_str_checked(
+        text: &str,
+        path: &Path,
+        check: Option<PreviewCheck>,
+    ) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
             path: path.to_path_buf(),
             message: format!("malformed scene file: {}", e.to_string().trim_end()),
         })?;
-        Builder::new(path).build(file)
+        Builder::new(path).build(file, check)
     }
 
     /// Material of triangle `t`.
@@ -313,7 +355,7 @@ impl Builder {
         }
     }
 
-    fn build(mut self, file: SceneFile) -> Result<Scene, SceneError> {
+    fn build(mut self, file: SceneFile, check: Option<PreviewCheck>) -> Result<Scene, SceneError> {
         let name = match &file.name {
             Some(n) if n.trim().is_empty() => return Err(self.err("name", "must not be empty")),
             Some(n) => n.clone(),
@@ -356,6 +398,16 @@ impl Builder {
         }
         if file.objects.is_empty() {
             return Err(self.err("objects", "the scene has no objects"));
+        }
+        let settings = self.settings(&file, environment.is_some())?;
+        if let Some(check) = check {
+            let preview = self.preview(&file, &camera, &settings, &lights, environment.as_ref());
+            // Past the triangle cap, loading stops with that (more specific) error.
+            if preview.triangles <= MAX_SCENE_TRIANGLES
+                && let Err(message) = check(&preview)
+            {
+                return Err(self.err(preview.largest_field.clone(), message));
+            }
         }
         let mut mesh = SceneMesh::default();
         let mut objects = Vec::new();
@@ -421,6 +473,101 @@ impl Builder {
                 source,
             });
         }
+        Ok(Scene {
+            name,
+            path: self.path.clone(),
+            camera,
+            lights,
+            environment,
+            materials,
+            objects,
+            mesh,
+            settings,
+            inputs,
+            warnings: self.warnings,
+        })
+    }
+
+    /// Sizes of everything the scene will hold, without loading a mesh.
+    fn preview(
+        &self,
+        file: &SceneFile,
+        camera: &Camera,
+        settings: &RenderSettings,
+        lights: &[Light],
+        environment: Option<&Environment>,
+    ) -> ScenePreview {
+        let (mut triangles, mut vertices) = (0u64, 0u64);
+        let mut unknown = Vec::new();
+        let mut largest = (0u64, "objects".to_string());
+        for (i, o) in file.objects.iter().enumerate() {
+            let field = format!("objects[{i}].shape");
+            let (t, v, field) = match &o.shape {
+                ShapeSpec::Mesh { file } => match mesh::peek_counts(&self.dir.join(file)) {
+                    Some(c) => (c.triangles, c.vertices, format!("{field}.file")),
+                    None => {
+                        unknown.push(file.clone());
+                        continue;
+                    }
+                },
+                // Shapes with parameters out of range are left out: loading reports them.
+                ShapeSpec::Plane { subdivisions, .. }
+                    if !(1..=MAX_SUBDIVISIONS).contains(subdivisions) =>
+                {
+                    continue;
+                }
+                ShapeSpec::Sphere { segments, .. } | ShapeSpec::Ring { segments, .. }
+                    if !(3..=MAX_SEGMENTS).contains(segments) =>
+                {
+                    continue;
+                }
+                ShapeSpec::Plane { subdivisions, .. } => {
+                    let n = u64::from((*subdivisions).max(1));
+                    (
+                        shapes::plane_triangles(*subdivisions),
+                        (n + 1) * (n + 1),
+                        field,
+                    )
+                }
+                ShapeSpec::Box { .. } => (shapes::CUBOID_TRIANGLES, 24, field),
+                // Flat-shaded parts make up to one vertex per triangle corner; count one per
+                // triangle (a sphere has about half that).
+                ShapeSpec::Sphere { segments, .. } => {
+                    let t = shapes::sphere_triangles(*segments);
+                    (t, t, field)
+                }
+                ShapeSpec::Ring { segments, .. } => {
+                    let t = shapes::ring_triangles(*segments);
+                    (t, t, field)
+                }
+            };
+            triangles += t;
+            vertices += v;
+            if t > largest.0 {
+                largest = (t, field);
+            }
+        }
+        ScenePreview {
+            camera_width: camera.width,
+            camera_height: camera.height,
+            settings: *settings,
+            lights: lights.len(),
+            environment_texels: environment
+                .map(|e| e.width() as u64 * e.height() as u64)
+                .unwrap_or(0),
+            triangles,
+            vertices,
+            unknown,
+            largest_field: largest.1,
+        }
+    }
+
+    /// Validates `[render]`, `[methods.*]` and `[visibility]`.
+    fn settings(
+        &self,
+        file: &SceneFile,
+        has_environment: bool,
+    ) -> Result<RenderSettings, SceneError> {
         let render = &file.render;
         if render.spp == 0 || render.spp > MAX_SPP {
             return Err(self.err(
@@ -438,7 +585,7 @@ impl Builder {
                 return Err(self.err(f, format!("must be between 0 and 64, got {v}")));
             }
         }
-        if environment.is_some() && r.bsdf_samples == 0 {
+        if has_environment && r.bsdf_samples == 0 {
             return Err(self.err(
                 "methods.reference.bsdf_samples",
                 "must be at least 1 in a scene with an [environment]: BRDF sampling at the receiver is the only strategy that finds the one-bounce light of the environment",
@@ -563,36 +710,24 @@ impl Builder {
                 ),
             ));
         }
-        Ok(Scene {
-            name,
-            path: self.path.clone(),
-            camera,
-            lights,
-            environment,
-            materials,
-            objects,
-            mesh,
-            settings: RenderSettings {
-                spp: render.spp,
-                seed: render.seed,
-                reference: r,
-                sg,
-                vsm: crate::visibility::vsm::VsmOptions {
-                    resolution: v.shadow_map_resolution,
-                    blur: v.vsm_blur,
-                    light_bleeding: v.light_bleeding,
-                },
-                vpl_count: v.vpl_count,
-                ism: crate::visibility::ism::IsmOptions {
-                    resolution: v.ism_resolution,
-                    points_per_map: v.ism_points,
-                    bias: v.ism_bias,
-                    blur: true,
-                },
-                prt: p,
+        Ok(RenderSettings {
+            spp: render.spp,
+            seed: render.seed,
+            reference: r,
+            sg,
+            vsm: crate::visibility::vsm::VsmOptions {
+                resolution: v.shadow_map_resolution,
+                blur: v.vsm_blur,
+                light_bleeding: v.light_bleeding,
             },
-            inputs,
-            warnings: self.warnings,
+            vpl_count: v.vpl_count,
+            ism: crate::visibility::ism::IsmOptions {
+                resolution: v.ism_resolution,
+                points_per_map: v.ism_points,
+                bias: v.ism_bias,
+                blur: true,
+            },
+            prt: p,
         })
     }
 

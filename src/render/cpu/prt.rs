@@ -38,6 +38,10 @@ pub fn render_prt_image(
             return;
         }
         for (x, out) in row.iter_mut().enumerate() {
+            // Per pixel as well as per row: a row at a high spp can take many seconds.
+            if progress.cancel.load(Ordering::Relaxed) {
+                return;
+            }
             let pixel = (y * w + x) as u64;
             let mut sum = DVec3::ZERO;
             for s in 0..opts.spp {

@@ -140,6 +140,10 @@ pub fn render(
         }
         let mut counters = Counters::default();
         for (x, out) in row.iter_mut().enumerate() {
+            // Per pixel as well as per row: a row at a high spp can take many seconds.
+            if progress.cancel.load(Ordering::Relaxed) {
+                return;
+            }
             *out = ctx.pixel(x as u32, y as u32, &mut counters);
         }
         rays.fetch_add(counters.rays, Ordering::Relaxed);

@@ -166,6 +166,9 @@ pub fn render_sg(
     };
     let tree = build_tree(scene, &pieces);
     stats.seconds.tree = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
     stats.reflector_triangles = scene
         .objects
         .iter()
@@ -214,6 +217,9 @@ pub fn render_sg(
         Vec::new()
     };
     stats.seconds.lighting = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
 
     // VPLs and their imperfect shadow maps (`--visibility approx`), per light.
     let t = Instant::now();
@@ -247,6 +253,9 @@ pub fn render_sg(
             Vec::new()
         };
     stats.seconds.vpls = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
 
     let camera = scene.camera.with_resolution(opts.width, opts.height);
     let w = opts.width as usize;
@@ -264,6 +273,9 @@ pub fn render_sg(
         })
         .collect();
     stats.seconds.primary = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
 
     let tally = Tally::default();
     let ctx = Ctx {
@@ -296,6 +308,10 @@ pub fn render_sg(
         }
         let mut scratch = Vec::new();
         for (x, out) in row.iter_mut().enumerate() {
+            // Per pixel as well as per row: a row at a high spp can take many seconds.
+            if progress.cancel.load(Ordering::Relaxed) {
+                return;
+            }
             let p = y * w + x;
             let mut sum = DVec3::ZERO;
             for s in 0..spp {

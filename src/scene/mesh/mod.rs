@@ -285,6 +285,76 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
     parse_loaded(path, &raw, format, gz, gltf_io::Buffers::Files)
 }
 
+/// Sizes of a mesh file read from its header without loading it (see [`peek_counts`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MeshCounts {
+    pub vertices: u64,
+    /// Triangles after fan triangulation (for PLY: the face count, as if every face were a
+    /// triangle; polygons make the loaded mesh larger, which the check after loading sees).
+    pub triangles: u64,
+}
+
+/// The vertex and triangle counts of a mesh file, found cheaply: a PLY's header (only its first
+/// 64 KiB are read, decompressed if needed), or one streaming pass over an OBJ that counts
+/// `v` and `f` lines without storing them. `None` for glTF/GLB, for a file that cannot be read
+/// or parsed (loading it reports the error properly), and for unknown extensions.
+///
+/// Used to refuse a scene that would not fit the memory budget before its meshes are loaded.
+pub fn peek_counts(path: &Path) -> Option<MeshCounts> {
+    use std::io::BufRead;
+    let (format, gz) = format_of(path).ok()?;
+    let file = std::fs::File::open(path).ok()?;
+    let file_len = file.metadata().ok()?.len();
+    let mut raw = std::io::BufReader::new(file);
+    let gz = gz || (format != Format::Gltf && raw.fill_buf().ok()?.starts_with(&[0x1f, 0x8b]));
+    let reader: Box<dyn BufRead> = if gz {
+        Box::new(std::io::BufReader::new(
+            flate2::bufread::MultiGzDecoder::new(raw),
+        ))
+    } else {
+        Box::new(raw)
+    };
+    match format {
+        Format::Ply => {
+            let mut head = Vec::new();
+            reader.take(64 << 10).read_to_end(&mut head).ok()?;
+            let (vertices, faces) = ply::header_counts(path, &head)?;
+            // A header may claim more than the file holds (a truncated or hostile file): the
+            // counts are capped by what the bytes could encode, at least 3 bytes a vertex and
+            // 4 a face in binary PLY, and deflate's largest ratio (1032:1) for gzip, so that
+            // such a file reaches the loader and its real error.
+            let data_len = if gz {
+                file_len.saturating_mul(1032)
+            } else {
+                file_len
+            };
+            Some(MeshCounts {
+                vertices: vertices.min(data_len / 3),
+                triangles: faces.min(data_len / 4),
+            })
+        }
+        Format::Obj => {
+            let mut counts = MeshCounts {
+                vertices: 0,
+                triangles: 0,
+            };
+            for line in reader.take(MAX_DECOMPRESSED_BYTES).split(b'\n') {
+                let line = line.ok()?;
+                let mut words = line
+                    .split(|b| b.is_ascii_whitespace())
+                    .filter(|w| !w.is_empty());
+                match words.next() {
+                    Some(b"v") => counts.vertices += 1,
+                    Some(b"f") => counts.triangles += (words.count() as u64).saturating_sub(2),
+                    _ => {}
+                }
+            }
+            Some(counts)
+        }
+        Format::Gltf => None,
+    }
+}
+
 /// Parses a mesh held in memory, like [`load_mesh`] without the file system: `name` is used in
 /// error messages and its extension decides the format (`.ply`, `.ply.gz`, `.obj`, `.obj.gz`,
 /// `.gltf`, `.glb`).

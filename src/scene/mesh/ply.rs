@@ -170,6 +170,19 @@ fn next_line(data: &[u8], pos: usize) -> Option<(&[u8], usize)> {
     Some((line, next))
 }
 
+/// `(vertices, faces)` declared by the header at the start of `data`, if it parses.
+pub(super) fn header_counts(path: &Path, data: &[u8]) -> Option<(u64, u64)> {
+    let header = parse_header(path, data).ok()?;
+    let count = |name: &str| {
+        header
+            .elements
+            .iter()
+            .find(|e| e.name == name)
+            .map(|e| e.count as u64)
+    };
+    Some((count("vertex")?, count("face").unwrap_or(0)))
+}
+
 fn parse_header(path: &Path, data: &[u8]) -> Result<Header, MeshError> {
     let mut pos = 0;
     let mut line_no = 0;
