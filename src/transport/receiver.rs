@@ -169,7 +169,12 @@ pub fn one_bounce_with(
     // triangle edge-on, but rounding could otherwise let a triangle that surrounds x span a
     // whole hemisphere of directions.
     let to_x = x - centroid;
-    if !(to_x.dot(refl.normal) > 1e-4 * to_x.length()) || rx.len == 0 && rx.diffuse == Vec3::ZERO {
+    // The geometric plane decides, not the shading normal: on a curved mesh a neighbour's
+    // interpolated normal can face a receiver that lies behind the neighbour's plane (a firefly:
+    // a bunny point lit 500× too brightly by the piece next to it).
+    if !(to_x.dot(refl.geometric_normal) > 1e-4 * to_x.length())
+        || rx.len == 0 && rx.diffuse == Vec3::ZERO
+    {
         return Vec3::ZERO;
     }
     let rel = tri.map(|v| v - x);

@@ -35,8 +35,11 @@ pub struct ReflectedSg {
     pub diffuse: Vec3,
     pub lobes: [Sg; MAX_LOBES],
     pub len: usize,
-    /// Unit normal of the lit side.
+    /// Unit normal of the lit side (the mean shading normal on curved meshes).
     pub normal: Vec3,
+    /// Unit geometric normal of the lit side: a receiver behind this plane gets no light from
+    /// the triangle, whatever its shading normals say (as in the exact integral).
+    pub geometric_normal: Vec3,
     /// Point the lobes were built at (the centroid).
     pub origin: Vec3,
     /// Light position, kept for the mirror-image refinement.
@@ -158,6 +161,7 @@ pub fn reflected_sg_shaded(
         lobes,
         len: b.len,
         normal: n,
+        geometric_normal: if flip { -ng } else { ng },
         origin: y,
         light,
         half_vector: refl.brdf.has_half_vector_lobe(),

@@ -306,3 +306,67 @@ fn random_probe_print() {
         );
     }
 }
+
+/// A receiver behind a reflector triangle's geometric plane gets nothing from it, even when the
+/// triangle's shading normals lean so far that their mean faces the receiver (on a curved mesh,
+/// the neighbour of a receiver point; before the check used the geometric plane, such a
+/// neighbour lit a bunny point 500× too brightly).
+#[test]
+fn a_receiver_behind_the_geometric_plane_gets_nothing() {
+    use super::receiver::{ReceiverLobes, ReceiverOptions, one_bounce_with};
+    use super::reflector::{Reflector, aim_at_receiver, reflected_sg_shaded};
+    let brdf = Brdf::Ward {
+        diffuse: Vec3::splat(0.05),
+        specular: Vec3::splat(0.9),
+        roughness: 0.12,
+    };
+    // A small triangle in the plane y = 0, geometric normal +y; vertex normals tilted 60°
+    // towards +x, so their mean leans towards the receiver side x > 0.
+    let tri = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.01, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, -0.01),
+    ];
+    let refl = Reflector {
+        vertices: tri,
+        brdf,
+    };
+    let tilted = Vec3::new(60f32.to_radians().sin(), 60f32.to_radians().cos(), 0.0);
+    let light = Vec3::new(-1.0, 2.0, 0.0);
+    let s = reflected_sg_shaded(&refl, Some([tilted; 3]), light, Vec3::splat(10.0), 1.0)
+        .expect("lit from above");
+    let receiver_brdf = brdf;
+    let eye = Vec3::new(0.0, 1.0, 1.0);
+    for (x, n_x, behind) in [
+        // Just below the plane, beside the triangle, facing up-and-sideways: behind the plane.
+        (
+            Vec3::new(0.02, -0.002, -0.003),
+            Vec3::new(-0.2, 1.0, 0.0).normalize(),
+            true,
+        ),
+        // Above the plane: in front of it, lit.
+        (
+            Vec3::new(0.03, 0.01, -0.003),
+            Vec3::new(-1.0, 0.2, 0.0).normalize(),
+            false,
+        ),
+    ] {
+        let rx = ReceiverLobes::new(&receiver_brdf, n_x, (eye - x).normalize());
+        let v = one_bounce_with(
+            &aim_at_receiver(&s, x),
+            tri,
+            x,
+            &rx,
+            &ReceiverOptions::default(),
+        );
+        assert!(
+            s.normal.dot(x - refl.centroid()) > 0.0 || !behind,
+            "the shading normal faces x"
+        );
+        if behind {
+            assert_eq!(v, Vec3::ZERO, "behind the plane at {x}");
+        } else {
+            assert!(v.max_element() > 0.0, "in front of the plane at {x}: {v}");
+        }
+    }
+}

@@ -488,3 +488,70 @@ fn cut_probe() {
         );
     }
 }
+
+/// Diagnostic for fireflies: every sample of pixel (PROBE_X, PROBE_Y) of PROBE_SCENE rendered
+/// PROBE_W px wide at PROBE_SPP samples (as `render --method sg --indirect-only` does), with its
+/// value, and for the brightest sample the cut entries that carry most of it. Run with
+/// `PROBE_SCENE=scenes/bunny.toml PROBE_W=64 PROBE_SPP=64 PROBE_X=21 PROBE_Y=22 cargo test
+/// --release --lib firefly_probe -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn firefly_probe() {
+    let var = |k: &str| std::env::var(k).unwrap_or_else(|_| panic!("set {k}"));
+    let scene = Scene::load(std::path::Path::new(&var("PROBE_SCENE"))).expect("scene");
+    let w: u32 = var("PROBE_W").parse().expect("PROBE_W");
+    let spp: u32 = var("PROBE_SPP").parse().expect("PROBE_SPP");
+    let px: u32 = var("PROBE_X").parse().expect("PROBE_X");
+    let py: u32 = var("PROBE_Y").parse().expect("PROBE_Y");
+    let su = Setup::new(scene, w, false, CutOptions::default());
+    let lits = [su.lit()];
+    let ctx = su.ctx(&lits);
+    let scene = &su.scene;
+    let camera = scene.camera.with_resolution(w, su.opts.height);
+    let tally = Tally::default();
+    let mut scratch = Vec::new();
+    let pixel = (py * w + px) as u64;
+    let mut best = (0.0f32, None);
+    for s in 0..spp {
+        let o = sample_offset(spp, s, 0, pixel);
+        let hit = su.accel.intersect(
+            camera.position,
+            camera.ray_dir(px as f32 + o.x, py as f32 + o.y),
+            0.0,
+            f32::INFINITY,
+        );
+        let v = ctx.shade(hit.as_ref(), None, &mut scratch, &tally);
+        let obj = hit.map(|h| scene.tri_object(h.tri).name.clone());
+        println!("sample {s:3} at ({:.3}, {:.3}): {obj:?} {v}", o.x, o.y);
+        if v.element_sum() > best.0 {
+            best = (v.element_sum(), hit);
+        }
+    }
+    let Some(hit) = best.1 else { return };
+    // The brightest sample's cut, its largest entries.
+    let wo = (camera.position - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+    let sp = SurfacePoint::from_hit(scene, &hit, wo).expect("a surface point");
+    let rx = ReceiverLobes::new(scene.tri_material(hit.tri), sp.frame.n, wo);
+    let mut c = CutCounters::default();
+    lits[0].select(sp.p, &rx, &su.opts.cut, &mut scratch, &mut c);
+    scratch.sort_by(|a, b| b.value.element_sum().total_cmp(&a.value.element_sum()));
+    let total: f32 = scratch.iter().map(|e| e.value.element_sum()).sum();
+    println!(
+        "brightest sample at {}: cut of {} nodes, unshadowed sum {total}",
+        sp.p,
+        scratch.len()
+    );
+    for e in scratch.iter().take(8) {
+        let n = &lits[0].tree.nodes[e.node as usize];
+        let first = su.pieces[lits[0].tree.tri_order[n.first as usize] as usize].tri;
+        println!(
+            "  node {} ({} pieces, object {}, centroid {}, distance {:.4}): {}",
+            e.node,
+            n.count,
+            scene.tri_object(first).name,
+            n.centroid,
+            (n.centroid - sp.p).length(),
+            e.value
+        );
+    }
+}
