@@ -273,6 +273,12 @@ pub fn estimate(w: &Workload) -> Estimate {
                 parts.push(("shadow maps", costs::SHADOW_MAPS));
             }
         }
+        Method::Vpl => {
+            parts.push(("primary hits", w.samples * costs::SG_PER_SAMPLE));
+            if w.visibility != Visibility::Exact {
+                parts.push(("shadow maps", costs::SHADOW_MAPS));
+            }
+        }
         Method::Prt => {
             let coeffs = w.prt_order * w.prt_order;
             // RGB f32 transfer per vertex, once while it is computed and once as the result.
@@ -390,6 +396,7 @@ mod tests {
             Method::Direct,
             Method::Sg,
             Method::SgBrute,
+            Method::Vpl,
             Method::Prt,
         ] {
             let w = workload(method);
@@ -401,7 +408,7 @@ mod tests {
             };
             assert!(more(&|w| w.triangles *= 2) > base, "{method:?} triangles");
             assert!(more(&|w| w.pixels *= 2) > base, "{method:?} pixels");
-            if matches!(method, Method::Sg | Method::SgBrute) {
+            if matches!(method, Method::Sg | Method::SgBrute | Method::Vpl) {
                 assert!(more(&|w| w.samples *= 2) > base, "{method:?} samples");
             }
             assert!(

@@ -747,7 +747,19 @@ fn environment_maps() {
 
 #[test]
 fn method_settings() {
-    let tables: [(&str, &str, &str); 36] = [
+    let tables: [(&str, &str, &str); 40] = [
+        (
+            "vpl_clamp_distance_negative",
+            "methods.vpl",
+            "clamp_distance = -0.5",
+        ),
+        (
+            "vpl_clamp_distance_nan",
+            "methods.vpl",
+            "clamp_distance = nan",
+        ),
+        ("vpl_spp_zero", "methods.vpl", "spp = 0"),
+        ("vpl_unknown_field", "methods.vpl", "clamp = 0.1"),
         (
             "vis_shadow_map_too_small",
             "visibility",
@@ -946,7 +958,7 @@ fn output_paths() {
 
 #[test]
 fn command_line_arguments() {
-    let cases: [(&str, &[&str]); 32] = [
+    let cases: [(&str, &[&str]); 35] = [
         ("cli_unknown_flag", &["--frobnicate"]),
         ("cli_unknown_flag_close_to_a_known_one", &["--thread", "2"]),
         ("cli_flag_without_value", &["--spp"]),
@@ -1028,6 +1040,15 @@ fn command_line_arguments() {
             &["--memory-budget", "4parsecs"],
         ),
         ("cli_memory_budget_zero", &["--memory-budget", "0"]),
+        ("cli_vpls_zero", &["--method", "vpl", "--vpls", "0"]),
+        (
+            "cli_vpl_clamp_distance_negative",
+            &["--method", "vpl", "--clamp-distance", "-1"],
+        ),
+        (
+            "cli_vpl_clamp_distance_nan",
+            &["--method", "vpl", "--clamp-distance", "nan"],
+        ),
     ];
     for (name, extra) in cases {
         let mut args = vec![

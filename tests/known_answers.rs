@@ -1038,7 +1038,7 @@ fn assert_same(
 #[test]
 fn every_method_is_bit_identical_across_threads_and_runs() {
     let runs = Runs::new();
-    let configs: [(&str, &[&str]); 9] = [
+    let configs: [(&str, &[&str]); 11] = [
         ("reference", &["--method", "reference"]),
         ("direct", &["--method", "direct"]),
         ("sg exact", &["--method", "sg"]),
@@ -1054,6 +1054,8 @@ fn every_method_is_bit_identical_across_threads_and_runs() {
             "prt cpu",
             &["--method", "prt", "--device", "cpu", "--no-cache"],
         ),
+        ("vpl", &["--method", "vpl"]),
+        ("vpl approx", &["--method", "vpl", "--visibility", "approx"]),
     ];
     for (label, args) in configs {
         let img = runs.check(label, args);

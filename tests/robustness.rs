@@ -20,6 +20,7 @@ use interreflect::render::Visibility;
 use interreflect::render::cpu::prt::{PrtImageOptions, render_prt_image};
 use interreflect::render::cpu::reference::{no_progress, render_quiet};
 use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
+use interreflect::render::cpu::vpl::{VplOptions, default_clamp_distance, render_vpl};
 use interreflect::render::cpu::{Progress, RenderOptions};
 use interreflect::scene::Scene;
 use std::path::Path;
@@ -360,6 +361,45 @@ fn sg_methods_are_finite() {
             lit > pixels / 2,
             "{label}: only {lit} of {pixels} pixels lit"
         );
+    }
+}
+
+/// The VPL baseline with each visibility, clamped and unclamped (a VPL on a receiver's own
+/// surface, at distance zero, must not divide by zero).
+#[test]
+fn vpl_is_finite() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load(dir.path());
+    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    let pixels = (scene.camera.width * scene.camera.height) as usize;
+    for vis in [Visibility::Exact, Visibility::Vsm, Visibility::Approx] {
+        for clamp_distance in [0.0, default_clamp_distance(&scene)] {
+            let label = format!("vpl {vis:?}, clamp {clamp_distance}");
+            let opts = VplOptions {
+                width: scene.camera.width,
+                height: scene.camera.height,
+                spp: 1,
+                seed: 3,
+                direct: true,
+                indirect: true,
+                visibility: vis,
+                vpl_count: 64,
+                clamp_distance,
+            };
+            let cancel = AtomicBool::new(false);
+            let progress = Progress {
+                done: &no_progress,
+                cancel: &cancel,
+            };
+            let (img, stats) = render_vpl(&scene, &accel, &opts, &progress).expect("not cancelled");
+            let lit = check_image(&label, &img);
+            assert_eq!(stats.nonfinite_samples, 0, "{label}: non-finite samples");
+            assert!(stats.vpls > 0, "{label}: no VPLs");
+            assert!(
+                lit > pixels / 2,
+                "{label}: only {lit} of {pixels} pixels lit"
+            );
+        }
     }
 }
 

@@ -11,9 +11,10 @@ use interreflect::precompute::prt::{TransferKind, WindowKind};
 use interreflect::render::checks::camera_inside_geometry;
 use interreflect::render::cpu::reference::work_units;
 use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_work_units};
+use interreflect::render::cpu::vpl::{VplOptions, VplStats, render_vpl};
 use interreflect::render::cpu::{RenderOptions, render};
 use interreflect::render::{Device, Method, Visibility};
-use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, RenderSettings, Scene, ScenePreview};
+use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, MAX_VPLS, RenderSettings, Scene, ScenePreview};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -101,6 +102,13 @@ pub struct RenderArgs {
     /// prt: neither read nor write the transfer cache.
     #[arg(long)]
     pub no_cache: bool,
+    /// VPLs per light for vpl and for sg's approximate visibility (default: visibility.vpl_count).
+    #[arg(long, allow_negative_numbers = true)]
+    pub vpls: Option<u32>,
+    /// vpl: clamp the geometry term at this distance, 0 = no clamp
+    /// (default: methods.vpl.clamp_distance, or 1/50 of the scene's diagonal).
+    #[arg(long, allow_negative_numbers = true)]
+    pub clamp_distance: Option<f32>,
     /// Refuse, before loading the meshes, a render whose estimated peak memory exceeds this
     /// size (e.g. 4GiB, 512MiB; "off" = no check). Default: INTERREFLECT_MEMORY_BUDGET, or 75 %
     /// of the physical memory.
@@ -129,7 +137,18 @@ struct RenderLog<'a> {
     sg: Option<SgLog>,
     #[serde(skip_serializing_if = "Option::is_none")]
     prt: Option<super::prt::PrtLog>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    vpl: Option<VplLog>,
     memory: MemoryLog,
+}
+
+/// VPL-baseline fields of the log.
+#[derive(Serialize)]
+struct VplLog {
+    visibility: Visibility,
+    vpls_per_light: u32,
+    #[serde(flatten)]
+    stats: VplStats,
 }
 
 /// The memory estimate checked against the budget (`interreflect::memory`).
@@ -306,22 +325,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("warning: {w}");
     }
     let is_sg = matches!(args.method, Method::Sg | Method::SgBrute);
-    if is_sg && scene.environment.is_some() {
+    if (is_sg || args.method == Method::Vpl) && scene.environment.is_some() {
         eprintln!(
-            "warning: {}: environment: --method {} ignores environment lighting (reference, direct and prt render it); the image shows the delta lights only",
+            "warning: {}: environment: --method {method} ignores environment lighting (reference, direct and prt render it); the image shows the delta lights only",
             scene.path.display(),
-            if args.method == Method::Sg {
-                "sg"
-            } else {
-                "sg-brute"
-            }
         );
     }
-    let spp = args.spp.unwrap_or(match args.method {
-        Method::Sg | Method::SgBrute => scene.settings.sg.spp,
-        Method::Prt => scene.settings.prt.spp,
-        _ => scene.settings.spp,
-    });
+    let spp = args
+        .spp
+        .unwrap_or_else(|| default_spp(args.method, &scene.settings));
     if spp == 0 || spp > MAX_SPP {
         bail!("--spp must be between 1 and {MAX_SPP}, got {spp}");
     }
@@ -375,6 +387,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     } else {
         None
     };
+    let vpl_count = args.vpls.unwrap_or(scene.settings.vpl_count);
+    if !(1..=MAX_VPLS).contains(&vpl_count) {
+        bail!("--vpls must be between 1 and {MAX_VPLS}, got {vpl_count}");
+    }
+    let clamp_distance = args
+        .clamp_distance
+        .or(scene.settings.vpl.clamp_distance)
+        .unwrap_or_else(|| interreflect::render::cpu::vpl::default_clamp_distance(&scene));
+    if !(clamp_distance.is_finite() && clamp_distance >= 0.0) {
+        bail!("--clamp-distance must be a length ≥ 0 (0 = no clamp), got {clamp_distance}");
+    }
+    let mut scene = scene;
+    scene.settings.vpl_count = vpl_count;
     times.load = t0.elapsed().as_secs_f64();
 
     let pool = {
@@ -434,7 +459,50 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         else {
             return Ok(interrupted());
         };
-        (img, None, None, Some(prt_log), 0)
+        (img, None, None, Some(prt_log), None, 0)
+    } else if args.method == Method::Vpl {
+        let opts = VplOptions {
+            width,
+            height,
+            spp,
+            seed,
+            direct: !args.indirect_only,
+            indirect: true,
+            visibility: args.visibility,
+            vpl_count,
+            clamp_distance,
+        };
+        let result = progress::run(height as u64, args.quiet, |prog| {
+            pool.install(|| render_vpl(&scene, &accel, &opts, prog))
+        });
+        let Some((img, stats)) = result else {
+            return Ok(interrupted());
+        };
+        log(format!(
+            "vpl: {} VPLs, clamp distance {:.4} ({} of {} pairs clamped), {} visibility rays",
+            stats.vpls,
+            stats.clamp_distance,
+            stats.clamped_pairs,
+            stats.pairs,
+            stats.visibility_rays
+        ));
+        log(format!(
+            "vpl stages: shadow maps {:.2} s, VPLs {:.2} s, imperfect shadow maps {:.2} s, shading {:.2} s",
+            stats.seconds.shadow_maps, stats.seconds.vpls, stats.seconds.ism, stats.seconds.shading
+        ));
+        let nonfinite = stats.nonfinite_samples;
+        (
+            img,
+            None,
+            None,
+            None,
+            Some(VplLog {
+                visibility: args.visibility,
+                vpls_per_light: vpl_count,
+                stats,
+            }),
+            nonfinite,
+        )
     } else if is_sg {
         let opts = SgOptions {
             width,
@@ -487,6 +555,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
                 stats,
             }),
             None,
+            None,
             nonfinite,
         )
     } else {
@@ -523,10 +592,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             }),
             None,
             None,
+            None,
             stats.nonfinite_samples,
         )
     };
-    let (img, reference_log, sg_log, prt_log, nonfinite) = rendered;
+    let (img, reference_log, sg_log, prt_log, vpl_log, nonfinite) = rendered;
     times.render = t.elapsed().as_secs_f64();
     // The last check: once writing starts, all three outputs are written (each atomically).
     if cancel.load(Ordering::SeqCst) {
@@ -577,6 +647,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         reference: reference_log,
         sg: sg_log,
         prt: prt_log,
+        vpl: vpl_log,
         memory: MemoryLog {
             estimate_bytes: estimate.total(),
             budget_bytes: budget.bytes,
@@ -612,6 +683,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     Ok(0)
 }
 
+/// The scene's sample count for `method`.
+fn default_spp(method: Method, settings: &RenderSettings) -> u32 {
+    match method {
+        Method::Sg | Method::SgBrute => settings.sg.spp,
+        Method::Vpl => settings.vpl.spp.unwrap_or(settings.sg.spp),
+        Method::Prt => settings.prt.spp,
+        Method::Reference | Method::Direct => settings.spp,
+    }
+}
+
 /// The `--method` value as typed.
 fn method_name(m: Method) -> &'static str {
     match m {
@@ -619,6 +700,7 @@ fn method_name(m: Method) -> &'static str {
         Method::Direct => "direct",
         Method::Sg => "sg",
         Method::SgBrute => "sg-brute",
+        Method::Vpl => "vpl",
         Method::Prt => "prt",
     }
 }
@@ -639,11 +721,7 @@ fn workload(
     let pixels = pixels.min(side * side);
     let spp = args
         .spp
-        .unwrap_or(match args.method {
-            Method::Sg | Method::SgBrute => settings.sg.spp,
-            Method::Prt => settings.prt.spp,
-            _ => settings.spp,
-        })
+        .unwrap_or_else(|| default_spp(args.method, settings))
         .clamp(1, MAX_SPP) as u64;
     let cut_mode = args.cut.unwrap_or(settings.sg.cut);
     let max_cut = args.max_cut.unwrap_or(settings.sg.max_cut);

@@ -16,6 +16,9 @@ pub enum Method {
     Sg,
     /// The SG method over every reflector triangle (no tree): the cut's own yardstick.
     SgBrute,
+    /// The VPL baseline (instant radiosity): the sg method's VPLs as clamped point lights, with
+    /// exact BRDFs at both ends.
+    Vpl,
     /// SH diffuse precomputed radiance transfer under distant lighting (environment maps and
     /// directional lights): the low-frequency comparison method.
     Prt,
@@ -33,7 +36,8 @@ pub enum Device {
     Cpu,
 }
 
-/// Visibility between reflectors and receivers (and from the light to reflectors) for `sg`.
+/// Visibility between reflectors and receivers (and from the light to reflectors) for `sg`,
+/// `sg-brute` and `vpl`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Visibility {

@@ -58,6 +58,9 @@ pub const MAX_EMISSION: f32 = 1e20;
 /// Largest accepted `methods.sg.max_cut`.
 pub const MAX_CUT: u32 = 1 << 24;
 
+/// Most VPLs per light (`[visibility] vpl_count`, `render --vpls`).
+pub const MAX_VPLS: u32 = 100_000;
+
 /// Why a scene could not be loaded. Every message names the file and, where it applies, the field.
 #[derive(thiserror::Error, Debug)]
 pub enum SceneError {
@@ -181,6 +184,8 @@ pub struct RenderSettings {
     pub ism: crate::visibility::ism::IsmOptions,
     /// SH diffuse PRT (`[methods.prt]`).
     pub prt: PrtSpec,
+    /// The VPL baseline (`[methods.vpl]`).
+    pub vpl: VplSpec,
 }
 
 /// What a scene will hold, known before its meshes are loaded: shape sizes come from their
@@ -670,6 +675,23 @@ impl Builder {
                 format!("must be between 1 and {MAX_SPP}, got {}", p.spp),
             ));
         }
+        let vp = file.methods.vpl;
+        if let Some(d) = vp.clamp_distance
+            && !(d.is_finite() && (0.0..=MAX_COORDINATE).contains(&d))
+        {
+            return Err(self.err(
+                "methods.vpl.clamp_distance",
+                format!("must be a length between 0 (no clamp) and {MAX_COORDINATE:e}, got {d}"),
+            ));
+        }
+        if let Some(n) = vp.spp
+            && (n == 0 || n > MAX_SPP)
+        {
+            return Err(self.err(
+                "methods.vpl.spp",
+                format!("must be between 1 and {MAX_SPP}, got {n}"),
+            ));
+        }
         let v = file.visibility;
         if !(16..=MAX_SHADOW_MAP).contains(&v.shadow_map_resolution) {
             return Err(self.err(
@@ -693,7 +715,7 @@ impl Builder {
             ));
         }
         for (field, value, lo, hi) in [
-            ("visibility.vpl_count", v.vpl_count, 1, 100_000),
+            ("visibility.vpl_count", v.vpl_count, 1, MAX_VPLS),
             ("visibility.ism_resolution", v.ism_resolution, 4, 1024),
             ("visibility.ism_points", v.ism_points, 1, 10_000_000),
         ] {
@@ -728,6 +750,7 @@ impl Builder {
                 blur: true,
             },
             prt: p,
+            vpl: vp,
         })
     }
 

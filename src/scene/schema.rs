@@ -317,6 +317,22 @@ pub struct MethodsSpec {
     pub sg: SgSpec,
     #[serde(default)]
     pub prt: PrtSpec,
+    #[serde(default)]
+    pub vpl: VplSpec,
+}
+
+/// Settings of the VPL baseline (`vpl`). The VPLs themselves (count, imperfect shadow maps) are
+/// the ones in `[visibility]`, shared with sg's approximate visibility.
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct VplSpec {
+    /// The geometry term is clamped at this distance (scene units): cos θ_x cos θ_y /
+    /// max(d², clamp_distance²); 0 = no clamp; absent = 1/50 of the scene's diagonal.
+    #[serde(default)]
+    pub clamp_distance: Option<f32>,
+    /// Samples per pixel (absent = methods.sg.spp, so that the two compare at equal sampling).
+    #[serde(default)]
+    pub spp: Option<u32>,
 }
 
 /// Settings of SH diffuse precomputed radiance transfer (`prt`).

@@ -1,5 +1,6 @@
 //! CPU renderers (rayon): the path-traced reference (direct light + exactly one indirect bounce)
-//! and direct light only, and the SG renderer (`sg`, `sg-brute`).
+//! and direct light only, the SG renderer (`sg`, `sg-brute`), the VPL baseline (`vpl`) and PRT's
+//! image pass.
 
 pub mod env_light;
 pub mod prt;
@@ -7,5 +8,6 @@ pub mod reference;
 pub mod reflectors;
 pub mod sg;
 pub mod surface;
+pub mod vpl;
 
 pub use reference::{Progress, RenderOptions, RenderStats, render};

@@ -1,0 +1,357 @@
+//! The VPL baseline (`--method vpl`, METHOD §7): instant radiosity with the same virtual point
+//! lights the SG method's approximate visibility uses — the method the paper improves on.
+//!
+//! Direct light is computed as by `direct` and `sg`. The one-bounce light at a receiver point x
+//! is the sum over the VPLs: a VPL at y on a reflector holds the light's incident power Φ there
+//! (`precompute::vpl`) and re-emits it through its material's exact BRDF,
+//!
+//! L(x → eye) = Σ_k f_x(y_k → x → eye) · f_y(light → y_k → x) · Φ_k · G_k · V(y_k, x),
+//! G_k = cos θ_x cos θ_y / max(d², d_c²),
+//!
+//! with the shading normals at both ends and the usual clamp of the geometry term at the
+//! distance d_c (`[methods.vpl] clamp_distance`, default 1/50 of the scene's diagonal): without
+//! it, a VPL next to a receiver makes a bright splotch. The clamp removes energy near contact
+//! and the VPLs' discreteness stays: on glossy receivers every VPL's highlight is a spike, and
+//! highlights between VPLs are missing — what the SG method's continuous lobes avoid.
+//!
+//! Visibility, like `sg`'s: `exact` — shadow rays for the light and between VPLs and receivers;
+//! `vsm` — the light's variance shadow maps, rays between VPLs and receivers; `approx` — the
+//! variance shadow maps and each VPL's imperfect shadow map.
+
+use super::reference::Progress;
+use super::sg::sample_offset;
+use super::surface::{
+    SurfacePoint, light_visible, ray_epsilon, reflected_light, reflected_light_with,
+};
+use crate::accel::{Accel, Hit};
+use crate::brdf::Brdf;
+use crate::image::Image;
+use crate::math::Frame;
+use crate::precompute::vpl::{self, Vpl};
+use crate::render::Visibility;
+use crate::scene::Scene;
+use crate::visibility::ism::ImperfectShadowMaps;
+use crate::visibility::vsm::VarianceShadowMap;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Settings of a VPL render.
+#[derive(Clone, Copy, Debug)]
+pub struct VplOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel (as for sg: the pixel centre, or a stratified grid).
+    pub spp: u32,
+    pub seed: u64,
+    pub direct: bool,
+    pub indirect: bool,
+    pub visibility: Visibility,
+    /// VPLs per light.
+    pub vpl_count: u32,
+    /// The geometry term's distance clamp d_c (scene units; 0 = no clamp).
+    pub clamp_distance: f32,
+}
+
+/// Seconds per stage.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct VplTimes {
+    /// Variance shadow maps (`vsm`, `approx`).
+    pub shadow_maps: f64,
+    /// VPL sampling.
+    pub vpls: f64,
+    /// Imperfect shadow maps (`approx`).
+    pub ism: f64,
+    pub shading: f64,
+}
+
+/// What a VPL render did.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct VplStats {
+    /// VPLs of all lights.
+    pub vpls: usize,
+    pub clamp_distance: f32,
+    /// VPL–receiver pairs whose geometry term the clamp reduced.
+    pub clamped_pairs: u64,
+    /// VPL–receiver pairs evaluated (both facing each other).
+    pub pairs: u64,
+    /// Shadow rays between VPLs and receivers.
+    pub visibility_rays: u64,
+    pub nonfinite_samples: u64,
+    pub seconds: VplTimes,
+}
+
+/// A VPL ready to shade with: its frame (shading normal) and its material.
+struct Emitter<'a> {
+    /// Index of the VPL among its light's VPLs (its imperfect shadow map).
+    index: usize,
+    vpl: Vpl,
+    frame: Frame,
+    /// Direction to the light in the VPL's frame.
+    wi_local: Vec3,
+    brdf: &'a Brdf,
+}
+
+/// One light's VPLs and their visibility.
+struct LightVpls<'a> {
+    emitters: Vec<Emitter<'a>>,
+    ism: Option<ImperfectShadowMaps>,
+}
+
+/// Barycentric (u, v) of `p` in triangle `tri` (weights of vertices 1 and 2).
+fn barycentrics(scene: &Scene, tri: u32, p: Vec3) -> (f32, f32) {
+    let [a, b, c] = scene.mesh.tri(tri);
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let den = d11 * d22 - d12 * d12;
+    if !(den > 0.0) {
+        return (1.0 / 3.0, 1.0 / 3.0);
+    }
+    let u = ((d22 * d1 - d12 * d2) / den).clamp(0.0, 1.0);
+    let v = ((d11 * d2 - d12 * d1) / den).clamp(0.0, 1.0 - u);
+    (u, v)
+}
+
+/// The default clamp distance: 1/50 of the scene's bounding-box diagonal.
+pub fn default_clamp_distance(scene: &Scene) -> f32 {
+    scene.mesh.diagonal() / 50.0
+}
+
+/// Renders `scene` with the VPL baseline. `None` when cancelled.
+pub fn render_vpl(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &VplOptions,
+    progress: &Progress,
+) -> Option<(Image, VplStats)> {
+    let mut stats = VplStats {
+        clamp_distance: opts.clamp_distance,
+        ..VplStats::default()
+    };
+    let eps = ray_epsilon(scene);
+
+    let t = Instant::now();
+    let maps: Vec<Option<VarianceShadowMap>> = scene
+        .lights
+        .iter()
+        .map(|light| {
+            (opts.visibility != Visibility::Exact).then(|| {
+                VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
+            })
+        })
+        .collect();
+    stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
+
+    // The same VPLs as sg's approximate visibility (same sources, count and seeds).
+    let mut lights: Vec<LightVpls> = Vec::new();
+    if opts.indirect {
+        let t = Instant::now();
+        let sources = vpl::sources(scene);
+        let vpls: Vec<Vec<Vpl>> = scene
+            .lights
+            .iter()
+            .zip(&maps)
+            .enumerate()
+            .map(|(k, (light, map))| {
+                let visible = |p: Vec3| match map {
+                    None => f32::from(u8::from(light_visible(accel, light, p, eps))),
+                    Some(m) => light.incident(p).map_or(0.0, |inc| m.lit(p + inc.wi * eps)),
+                };
+                vpl::generate(
+                    &sources,
+                    light,
+                    opts.vpl_count as usize,
+                    opts.seed ^ k as u64,
+                    &visible,
+                )
+            })
+            .collect();
+        stats.seconds.vpls = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        for (k, vs) in vpls.into_iter().enumerate() {
+            let ism = (opts.visibility == Visibility::Approx).then(|| {
+                ImperfectShadowMaps::build(
+                    &scene.mesh.positions,
+                    &scene.mesh.indices,
+                    &vs,
+                    &scene.settings.ism,
+                    opts.seed ^ k as u64,
+                )
+            });
+            let emitters = vs
+                .iter()
+                .enumerate()
+                .filter_map(|(index, v)| {
+                    let (u, w) = barycentrics(scene, v.tri, v.position);
+                    // Oriented to the lit side (the VPL's normal points there).
+                    let sp = SurfacePoint::at(scene, v.tri, u, w, v.normal)?;
+                    let wi_local = sp.frame.to_local(v.wi);
+                    (wi_local.z > 0.0).then(|| Emitter {
+                        index,
+                        vpl: *v,
+                        frame: sp.frame,
+                        wi_local,
+                        brdf: scene.tri_material(v.tri),
+                    })
+                })
+                .collect::<Vec<_>>();
+            stats.vpls += emitters.len();
+            lights.push(LightVpls { emitters, ism });
+        }
+        stats.seconds.ism = t.elapsed().as_secs_f64();
+    }
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
+
+    let camera = scene.camera.with_resolution(opts.width, opts.height);
+    let w = opts.width as usize;
+    let spp = opts.spp.max(1);
+    let dc2 = opts.clamp_distance * opts.clamp_distance;
+    let (pairs, clamped, rays, bad) = (
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+    );
+    let t = Instant::now();
+    let mut img = Image::new(opts.width, opts.height);
+    img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        if progress.cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        let mut c = [0u64; 3];
+        for (x, out) in row.iter_mut().enumerate() {
+            if progress.cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            let pixel = (y * w + x) as u64;
+            let mut sum = DVec3::ZERO;
+            for s in 0..spp {
+                let o = sample_offset(spp, s, opts.seed, pixel);
+                let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
+                let hit = accel.intersect(camera.position, dir, 0.0, f32::INFINITY);
+                let v = shade(
+                    scene,
+                    accel,
+                    opts,
+                    &maps,
+                    &lights,
+                    hit.as_ref(),
+                    eps,
+                    dc2,
+                    &mut c,
+                );
+                if v.is_finite() {
+                    sum += v.as_dvec3();
+                } else {
+                    bad.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+            *out = (sum / spp as f64).as_vec3();
+        }
+        pairs.fetch_add(c[0], Ordering::Relaxed);
+        clamped.fetch_add(c[1], Ordering::Relaxed);
+        rays.fetch_add(c[2], Ordering::Relaxed);
+        (progress.done)(1);
+    });
+    stats.seconds.shading = t.elapsed().as_secs_f64();
+    if progress.cancel.load(Ordering::Relaxed) {
+        return None;
+    }
+    stats.pairs = pairs.into_inner();
+    stats.clamped_pairs = clamped.into_inner();
+    stats.visibility_rays = rays.into_inner();
+    stats.nonfinite_samples = bad.into_inner();
+    Some((img, stats))
+}
+
+/// Radiance of one pixel sample; `c` counts (pairs, clamped pairs, rays).
+#[allow(clippy::too_many_arguments)]
+fn shade(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &VplOptions,
+    maps: &[Option<VarianceShadowMap>],
+    lights: &[LightVpls],
+    hit: Option<&Hit>,
+    eps: f32,
+    dc2: f32,
+    c: &mut [u64; 3],
+) -> Vec3 {
+    let Some(hit) = hit else {
+        return Vec3::ZERO;
+    };
+    let camera = scene.camera.position;
+    let wo = (camera - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+    let Some(sp) = SurfacePoint::from_hit(scene, hit, wo) else {
+        return Vec3::ZERO;
+    };
+    let brdf = scene.tri_material(hit.tri);
+    let mut l = Vec3::ZERO;
+    if opts.direct {
+        for (light, map) in scene.lights.iter().zip(maps) {
+            l += match map {
+                None => reflected_light(accel, brdf, &sp, wo, light, eps),
+                Some(m) => reflected_light_with(brdf, &sp, wo, light, |inc| {
+                    m.lit(sp.offset(eps) + inc.wi * eps)
+                }),
+            };
+        }
+    }
+    if !opts.indirect || !scene.tri_object(hit.tri).receiver {
+        return l;
+    }
+    let wo_l = sp.frame.to_local(wo);
+    if !(wo_l.z > 0.0) {
+        return l;
+    }
+    let xo = sp.offset(eps);
+    for lv in lights {
+        for e in &lv.emitters {
+            let d = e.vpl.position - sp.p;
+            let d2 = d.length_squared();
+            if !(d2 > 0.0) {
+                continue;
+            }
+            let dist = d2.sqrt();
+            let to_vpl = d / dist;
+            // Both ends must face each other (geometric and shading normals).
+            if sp.ng.dot(to_vpl) <= 0.0 || e.vpl.normal.dot(-to_vpl) <= 0.0 {
+                continue;
+            }
+            let wi_x = sp.frame.to_local(to_vpl);
+            let wo_y = e.frame.to_local(-to_vpl);
+            if wi_x.z <= 0.0 || wo_y.z <= 0.0 {
+                continue;
+            }
+            let fx = brdf.eval(wo_l, wi_x);
+            let fy = e.brdf.eval(wo_y, e.wi_local);
+            if fx == Vec3::ZERO || fy == Vec3::ZERO {
+                continue;
+            }
+            c[0] += 1;
+            if d2 < dc2 {
+                c[1] += 1;
+            }
+            let g = wi_x.z * wo_y.z / d2.max(dc2);
+            let v = match &lv.ism {
+                Some(ism) => ism.visibility(e.index, sp.p),
+                None => {
+                    c[2] += 1;
+                    let tmax = dist * (1.0 - 1e-5) - eps;
+                    f32::from(u8::from(accel.unoccluded(xo, to_vpl, 0.0, tmax)))
+                }
+            };
+            if v > 0.0 {
+                l += fx * fy * e.vpl.power * (g * v);
+            }
+        }
+    }
+    l
+}
