@@ -18,6 +18,7 @@
 //! - [`render`]: the renderers (CPU, rayon).
 //! - [`image`]: image buffers, EXR/PNG I/O, tonemapping.
 //! - [`compare`]: error metrics and false-colour error maps.
+//! - [`export`]: Mitsuba 3 export of a loaded scene.
 //! - [`fsutil`]: atomic output files.
 #![forbid(unsafe_code)]
 // `!(x > 0.0)` is written on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
@@ -27,6 +28,7 @@ pub mod accel;
 pub mod brdf;
 pub mod compare;
 pub mod cut;
+pub mod export;
 pub mod fsutil;
 pub mod image;
 pub mod math;
