@@ -642,9 +642,9 @@ pub fn plan(scene: &Scene) -> Plan {
         "<!-- {} -->",
         comment_text(&format!(
             "Exported by `interreflect export-mitsuba` from {} (scene \"{}\"). Renders direct \
-             light plus exactly one indirect bounce, like the reference: `mitsuba scene.xml`, \
-             or -D spp=N -D seed=S -D width=W -D height=H; -D max_depth=2 renders direct light \
-             only. Geometry in world space, as the renderer loaded it.",
+             light plus exactly one indirect bounce, like the reference: `mitsuba -m scalar_rgb \
+             scene.xml`, or -D spp=N -D seed=S -D width=W -D height=H; -D max_depth=2 renders \
+             direct light only. Geometry in world space, as the renderer loaded it.",
             file, scene.name
         ))
     );
