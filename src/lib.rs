@@ -18,6 +18,7 @@
 //! - [`render`]: the renderers (CPU, rayon).
 //! - [`image`]: image buffers, EXR/PNG I/O, tonemapping.
 //! - [`compare`]: error metrics and false-colour error maps.
+//! - [`export`]: Mitsuba 3 export of a loaded scene.
 //! - [`fsutil`]: atomic output files.
 //! - [`memory`]: the memory budget and the estimate of a render's peak memory.
 #![forbid(unsafe_code)]
@@ -28,6 +29,7 @@ pub mod accel;
 pub mod brdf;
 pub mod compare;
 pub mod cut;
+pub mod export;
 pub mod fsutil;
 pub mod image;
 pub mod math;

@@ -12,6 +12,7 @@ mod compare;
 mod envmap;
 mod fit;
 mod info;
+mod mitsuba;
 mod progress;
 mod prt;
 mod render;
@@ -56,6 +57,9 @@ pub enum Command {
     /// Irradiance of an environment map from its SH projection next to brute force, per order
     /// (a table, and images: environment | brute force | SH | relative error).
     ShIrradiance(sh_irradiance::ShIrradianceArgs),
+    /// Write a Mitsuba 3 scene (XML + PLY meshes) with the same camera, lights and materials,
+    /// rendering direct light plus one bounce, to check the reference against (docs/mitsuba.md).
+    ExportMitsuba(mitsuba::ExportMitsubaArgs),
 }
 
 /// Writes `text` to standard output; a closed pipe (`interreflect info ... | head`) is not an
@@ -83,5 +87,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Fit(a) => fit::run(a),
         Command::ShIrradiance(a) => sh_irradiance::run(a),
         Command::ConvertEnvmap(a) => envmap::run(a),
+        Command::ExportMitsuba(a) => mitsuba::run(a),
     }
 }
