@@ -1396,3 +1396,52 @@ fn parse_mesh_bytes_refuses_external_gltf_buffers() {
         "{msg}"
     );
 }
+
+/// `peek_counts` reads sizes without loading: a PLY's header (plain or gzip), a counting pass
+/// over an OBJ (fan triangulation: an n-gon is n − 2 triangles), nothing for glTF or a
+/// missing file; and a header that claims more than its bytes could hold is capped.
+#[test]
+fn peek_counts_reads_headers_and_caps_what_the_bytes_cannot_hold() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+    let p = write_file(dir.path(), "a.ply", ply.as_bytes());
+    let expect = MeshCounts {
+        vertices: 4,
+        triangles: 2,
+    };
+    assert_eq!(peek_counts(&p), Some(expect));
+    // The same counts as the loader finds.
+    let m = load_mesh(&p).unwrap();
+    assert_eq!((m.positions.len(), m.indices.len()), (4, 2));
+    let gz = write_file(dir.path(), "a.ply.gz", &gzip(ply.as_bytes()));
+    assert_eq!(peek_counts(&gz), Some(expect));
+
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n# f 1 2 3\nvn 0 0 1\n";
+    let p = write_file(dir.path(), "b.obj", obj.as_bytes());
+    assert_eq!(
+        peek_counts(&p),
+        Some(MeshCounts {
+            vertices: 5,
+            triangles: 3
+        })
+    );
+    assert_eq!(load_mesh(&p).unwrap().indices.len(), 3);
+
+    // A 200-byte header claiming 10⁹ faces and 10⁹ vertices: capped at what 200 bytes hold.
+    let liar = "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\nproperty float y\nproperty float z\nelement face 1000000000\nproperty list uchar int vertex_indices\nend_header\n";
+    let p = write_file(dir.path(), "c.ply", liar.as_bytes());
+    let len = liar.len() as u64;
+    assert_eq!(
+        peek_counts(&p),
+        Some(MeshCounts {
+            vertices: len / 3,
+            triangles: len / 4
+        })
+    );
+
+    assert_eq!(peek_counts(&dir.path().join("missing.ply")), None);
+    let gltf = write_file(dir.path(), "d.gltf", b"{}");
+    assert_eq!(peek_counts(&gltf), None);
+    let garbage = write_file(dir.path(), "e.ply", b"not a ply at all\n");
+    assert_eq!(peek_counts(&garbage), None);
+}
