@@ -1416,7 +1416,8 @@ fn peek_counts_reads_headers_and_caps_what_the_bytes_cannot_hold() {
     let gz = write_file(dir.path(), "a.ply.gz", &gzip(ply.as_bytes()));
     assert_eq!(peek_counts(&gz), Some(expect));
 
-    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n# f 1 2 3\nvn 0 0 1\n";
+    let obj =
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n# f 1 2 3\nvn 0 0 1\n";
     let p = write_file(dir.path(), "b.obj", obj.as_bytes());
     assert_eq!(
         peek_counts(&p),
