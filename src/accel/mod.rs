@@ -66,7 +66,13 @@ impl Accel {
             return None;
         }
         let tri = bvh.primitive_indices[hit.primitive_id as usize];
-        let (u, v) = barycentrics(&self.tris[tri as usize], origin + dir * hit.t);
+        let t = &self.tris[tri as usize];
+        let (u, v) = crate::math::triangle_barycentrics(
+            Vec3::from(t.v0),
+            Vec3::from(t.v1),
+            Vec3::from(t.v2),
+            origin + dir * hit.t,
+        );
         Some(Hit {
             tri,
             t: hit.t,
@@ -98,26 +104,6 @@ impl Accel {
 #[inline]
 fn canonical(dir: Vec3) -> Vec3 {
     dir + Vec3::ZERO
-}
-
-/// Barycentrics (u, v) of point p in triangle t (weights of v1 and v2), clamped to the triangle.
-fn barycentrics(t: &Triangle, p: Vec3) -> (f32, f32) {
-    let a = Vec3::from(t.v0);
-    let e1 = Vec3::from(t.v1) - a;
-    let e2 = Vec3::from(t.v2) - a;
-    let d = p - a;
-    let d11 = e1.dot(e1);
-    let d12 = e1.dot(e2);
-    let d22 = e2.dot(e2);
-    let dp1 = d.dot(e1);
-    let dp2 = d.dot(e2);
-    let den = d11 * d22 - d12 * d12;
-    if !(den.abs() > 0.0) {
-        return (1.0 / 3.0, 1.0 / 3.0);
-    }
-    let u = ((d22 * dp1 - d12 * dp2) / den).clamp(0.0, 1.0);
-    let v = ((d11 * dp2 - d12 * dp1) / den).clamp(0.0, 1.0 - u);
-    (u, v)
 }
 
 #[cfg(test)]

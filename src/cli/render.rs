@@ -303,7 +303,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     // with 130 and writes nothing (outputs are written only after the last check).
     let cancel = progress::interrupt_flag();
     let budget = Budget::resolve(args.memory_budget.as_deref()).map_err(anyhow::Error::msg)?;
-    let method = method_name(args.method);
+    // The `--method` value as typed (its name in clap's list of values).
+    let method = clap::ValueEnum::to_possible_value(&args.method)
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default();
     let scene = Scene::load_checked(
         &args.scene,
         Some(&mut |p: &ScenePreview| {
@@ -317,7 +320,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
                 p.environment_texels,
                 p.lights,
             );
-            let what = memory::describe_workload(&load, method, w, h);
+            let what = memory::describe_workload(&load, &method, w, h);
             budget.check(&memory::estimate(&load), &what)
         }),
     )?;
@@ -358,7 +361,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let estimate = memory::estimate(&load);
     if let Err(m) = budget.check(
         &estimate,
-        &memory::describe_workload(&load, method, width, height),
+        &memory::describe_workload(&load, &method, width, height),
     ) {
         bail!("{}: {m}", scene.path.display());
     }
@@ -690,18 +693,6 @@ fn default_spp(method: Method, settings: &RenderSettings) -> u32 {
         Method::Vpl => settings.vpl.spp.unwrap_or(settings.sg.spp),
         Method::Prt => settings.prt.spp,
         Method::Reference | Method::Direct => settings.spp,
-    }
-}
-
-/// The `--method` value as typed.
-fn method_name(m: Method) -> &'static str {
-    match m {
-        Method::Reference => "reference",
-        Method::Direct => "direct",
-        Method::Sg => "sg",
-        Method::SgBrute => "sg-brute",
-        Method::Vpl => "vpl",
-        Method::Prt => "prt",
     }
 }
 

@@ -152,6 +152,15 @@ fn rgb(name: &str, v: Vec3) -> Element {
     prop("rgb", name, vec3(v))
 }
 
+/// `<tag name="name" x=".." y=".." z=".."/>` (a `point` or a `vector`).
+fn xyz(tag: &str, name: &str, v: Vec3) -> Element {
+    Element::new(tag)
+        .attr("name", name)
+        .attr("x", num(v.x))
+        .attr("y", num(v.y))
+        .attr("z", num(v.z))
+}
+
 fn diffuse(kd: Vec3) -> Element {
     Element::new("bsdf")
         .attr("type", "diffuse")
@@ -374,13 +383,7 @@ pub fn light_emitter(light: &Light) -> (Element, Option<String>) {
         } => (
             Element::new("emitter")
                 .attr("type", "point")
-                .child(
-                    Element::new("point")
-                        .attr("name", "position")
-                        .attr("x", num(position.x))
-                        .attr("y", num(position.y))
-                        .attr("z", num(position.z)),
-                )
+                .child(xyz("point", "position", position))
                 .child(rgb("intensity", intensity)),
             None,
         ),
@@ -425,13 +428,7 @@ pub fn light_emitter(light: &Light) -> (Element, Option<String>) {
         } => (
             Element::new("emitter")
                 .attr("type", "directional")
-                .child(
-                    Element::new("vector")
-                        .attr("name", "direction")
-                        .attr("x", num(direction.x))
-                        .attr("y", num(direction.y))
-                        .attr("z", num(direction.z)),
-                )
+                .child(xyz("vector", "direction", direction))
                 .child(rgb("irradiance", irradiance)),
             None,
         ),

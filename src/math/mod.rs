@@ -13,6 +13,26 @@ pub use sampling::Rng;
 
 use std::f64::consts::PI;
 
+/// Barycentrics (u, v) of point p in triangle (a, b, c) (the weights of b and c), clamped to
+/// the triangle; the centroid for a degenerate triangle.
+pub fn triangle_barycentrics(
+    a: glam::Vec3,
+    b: glam::Vec3,
+    c: glam::Vec3,
+    p: glam::Vec3,
+) -> (f32, f32) {
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (dp1, dp2) = (d.dot(e1), d.dot(e2));
+    let den = d11 * d22 - d12 * d12;
+    if !(den.abs() > 0.0) {
+        return (1.0 / 3.0, 1.0 / 3.0);
+    }
+    let u = ((d22 * dp1 - d12 * dp2) / den).clamp(0.0, 1.0);
+    let v = ((d11 * dp2 - d12 * dp1) / den).clamp(0.0, 1.0 - u);
+    (u, v)
+}
+
 /// Gauss–Legendre nodes and weights on [−1, 1] (Newton iteration on P_n; Press et al. §4.5),
 /// exact for polynomials of degree ≤ 2n − 1.
 pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {

@@ -181,15 +181,7 @@ pub fn render_sg(
 
     // Shadow maps (`--visibility vsm`), one per light.
     let t = Instant::now();
-    let maps: Vec<Option<VarianceShadowMap>> = scene
-        .lights
-        .iter()
-        .map(|light| {
-            (opts.visibility != Visibility::Exact).then(|| {
-                VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
-            })
-        })
-        .collect();
+    let maps = shadow_maps(scene, accel, opts.visibility);
     stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
 
     // Light every reflector piece, per light (shadow rays or the shadow map at four points).
@@ -349,7 +341,48 @@ pub fn render_sg(
 
 /// The light's visibility at surface point `p` in [0, 1]: a shadow ray (offset `eps` towards
 /// the light), or the lit fraction of the light's variance shadow map at the same offset point.
-fn light_fraction(
+/// One variance shadow map per light, or none for each with `Visibility::Exact`.
+pub(super) fn shadow_maps(
+    scene: &Scene,
+    accel: &Accel,
+    visibility: Visibility,
+) -> Vec<Option<VarianceShadowMap>> {
+    scene
+        .lights
+        .iter()
+        .map(|light| {
+            (visibility != Visibility::Exact).then(|| {
+                VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
+            })
+        })
+        .collect()
+}
+
+/// Direct light of every light reflected at `sp` towards `wo`, the light's visibility by a
+/// shadow ray or by its shadow map (`maps[k]`, when there is one).
+pub(super) fn direct_light(
+    scene: &Scene,
+    accel: &Accel,
+    maps: &[Option<VarianceShadowMap>],
+    brdf: &crate::brdf::Brdf,
+    sp: &SurfacePoint,
+    wo: Vec3,
+    eps: f32,
+) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    for (k, light) in scene.lights.iter().enumerate() {
+        l += match maps.get(k).and_then(Option::as_ref) {
+            None => reflected_light(accel, brdf, sp, wo, light, eps),
+            Some(m) => reflected_light_with(brdf, sp, wo, light, |inc| {
+                m.lit(sp.offset(eps) + inc.wi * eps)
+            }),
+        };
+    }
+    l
+}
+
+/// The light's visibility at surface point `p`: a shadow ray (0 or 1), or the shadow map.
+pub(super) fn light_fraction(
     accel: &Accel,
     light: &Light,
     map: Option<&VarianceShadowMap>,
@@ -628,14 +661,7 @@ impl Ctx<'_> {
         let brdf = self.scene.tri_material(hit.tri);
         let mut l = Vec3::ZERO;
         if self.opts.direct {
-            for (k, light) in self.scene.lights.iter().enumerate() {
-                l += match self.map(k) {
-                    None => reflected_light(self.accel, brdf, &sp, wo, light, self.eps),
-                    Some(m) => reflected_light_with(brdf, &sp, wo, light, |inc| {
-                        m.lit(sp.offset(self.eps) + inc.wi * self.eps)
-                    }),
-                };
-            }
+            l += direct_light(self.scene, self.accel, self.maps, brdf, &sp, wo, self.eps);
         }
         if !self.opts.indirect || !self.scene.tri_object(hit.tri).receiver {
             return l;

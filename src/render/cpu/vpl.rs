@@ -19,14 +19,12 @@
 //! variance shadow maps and each VPL's imperfect shadow map.
 
 use super::reference::Progress;
-use super::sg::sample_offset;
-use super::surface::{
-    SurfacePoint, light_visible, ray_epsilon, reflected_light, reflected_light_with,
-};
+use super::sg::{direct_light, light_fraction, sample_offset, shadow_maps};
+use super::surface::{SurfacePoint, ray_epsilon};
 use crate::accel::{Accel, Hit};
 use crate::brdf::Brdf;
 use crate::image::Image;
-use crate::math::Frame;
+use crate::math::{Frame, triangle_barycentrics};
 use crate::precompute::vpl::{self, Vpl};
 use crate::render::Visibility;
 use crate::scene::Scene;
@@ -99,21 +97,6 @@ struct LightVpls<'a> {
     ism: Option<ImperfectShadowMaps>,
 }
 
-/// Barycentric (u, v) of `p` in triangle `tri` (weights of vertices 1 and 2).
-fn barycentrics(scene: &Scene, tri: u32, p: Vec3) -> (f32, f32) {
-    let [a, b, c] = scene.mesh.tri(tri);
-    let (e1, e2, d) = (b - a, c - a, p - a);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d1, d2) = (d.dot(e1), d.dot(e2));
-    let den = d11 * d22 - d12 * d12;
-    if !(den > 0.0) {
-        return (1.0 / 3.0, 1.0 / 3.0);
-    }
-    let u = ((d22 * d1 - d12 * d2) / den).clamp(0.0, 1.0);
-    let v = ((d11 * d2 - d12 * d1) / den).clamp(0.0, 1.0 - u);
-    (u, v)
-}
-
 /// The default clamp distance: 1/50 of the scene's bounding-box diagonal.
 pub fn default_clamp_distance(scene: &Scene) -> f32 {
     scene.mesh.diagonal() / 50.0
@@ -133,15 +116,7 @@ pub fn render_vpl(
     let eps = ray_epsilon(scene);
 
     let t = Instant::now();
-    let maps: Vec<Option<VarianceShadowMap>> = scene
-        .lights
-        .iter()
-        .map(|light| {
-            (opts.visibility != Visibility::Exact).then(|| {
-                VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
-            })
-        })
-        .collect();
+    let maps = shadow_maps(scene, accel, opts.visibility);
     stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
@@ -158,10 +133,7 @@ pub fn render_vpl(
             .zip(&maps)
             .enumerate()
             .map(|(k, (light, map))| {
-                let visible = |p: Vec3| match map {
-                    None => f32::from(u8::from(light_visible(accel, light, p, eps))),
-                    Some(m) => light.incident(p).map_or(0.0, |inc| m.lit(p + inc.wi * eps)),
-                };
+                let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
                 vpl::generate(
                     &sources,
                     light,
@@ -187,7 +159,8 @@ pub fn render_vpl(
                 .iter()
                 .enumerate()
                 .filter_map(|(index, v)| {
-                    let (u, w) = barycentrics(scene, v.tri, v.position);
+                    let [a, b, c] = scene.mesh.tri(v.tri);
+                    let (u, w) = triangle_barycentrics(a, b, c, v.position);
                     // Oriented to the lit side (the VPL's normal points there).
                     let sp = SurfacePoint::at(scene, v.tri, u, w, v.normal)?;
                     let wi_local = sp.frame.to_local(v.wi);
@@ -295,14 +268,7 @@ fn shade(
     let brdf = scene.tri_material(hit.tri);
     let mut l = Vec3::ZERO;
     if opts.direct {
-        for (light, map) in scene.lights.iter().zip(maps) {
-            l += match map {
-                None => reflected_light(accel, brdf, &sp, wo, light, eps),
-                Some(m) => reflected_light_with(brdf, &sp, wo, light, |inc| {
-                    m.lit(sp.offset(eps) + inc.wi * eps)
-                }),
-            };
-        }
+        l += direct_light(scene, accel, maps, brdf, &sp, wo, eps);
     }
     if !opts.indirect || !scene.tri_object(hit.tri).receiver {
         return l;
