@@ -9,8 +9,8 @@ use divan::{Bencher, black_box, counter::ItemsCount};
 use glam::Vec3;
 use interreflect::math::sg::Sg;
 use interreflect::math::spherical_triangle::{
-    Scheme, integrate_sg, integrate_sg_gauss_legendre, integrate_sg_piecewise_linear,
-    integrate_sg_scheme,
+    Scheme, benchmark_inputs, integrate_sg, integrate_sg_gauss_legendre,
+    integrate_sg_piecewise_linear, integrate_sg_scheme,
 };
 
 fn main() {
@@ -25,29 +25,6 @@ fn offset(c: Vec3, az: f32, angle: f32) -> Vec3 {
     let t = (t - c * c.dot(t)).normalize();
     let b = c.cross(t);
     (c * angle.cos() + (t * az.cos() + b * az.sin()) * angle.sin()).normalize()
-}
-
-/// (axis, λ, a, b, c): per λ, small (0.01 rad), medium (0.1) and large (1 rad) triangles with
-/// the axis inside, just outside (1.5 radii from the centre) and 0.5 rad away.
-fn table(lams: &[f32]) -> Vec<(Vec3, f32, Vec3, Vec3, Vec3)> {
-    let c = Vec3::new(0.3, -0.4, 0.87).normalize();
-    let mut out = Vec::new();
-    for &lam in lams {
-        for size in [0.01f32, 0.1, 1.0] {
-            let r = size / 3f32.sqrt();
-            let a = offset(c, 0.2, r);
-            let b = offset(c, 2.3, 0.8 * r);
-            let cc = offset(c, 4.3, 1.1 * r);
-            for p in [
-                offset(c, 1.0, 0.2 * r),
-                offset(c, 5.5, 1.5 * r),
-                offset(c, 3.3, r + 0.5),
-            ] {
-                out.push((p, lam, a, b, cc));
-            }
-        }
-    }
-    out
 }
 
 fn run(
@@ -67,25 +44,33 @@ fn run(
 /// The default `integrate_sg`, per λ (9 geometries each).
 #[divan::bench(args = LAMBDAS)]
 fn integrate_sg_default(bencher: Bencher, lam: f32) {
-    run(bencher, table(&[lam]), integrate_sg);
+    run(bencher, benchmark_inputs(&[lam]), integrate_sg);
 }
 
 /// Gauss-Legendre (default order), per λ.
 #[divan::bench(args = LAMBDAS)]
 fn integrate_sg_gl(bencher: Bencher, lam: f32) {
-    run(bencher, table(&[lam]), integrate_sg_gauss_legendre);
+    run(
+        bencher,
+        benchmark_inputs(&[lam]),
+        integrate_sg_gauss_legendre,
+    );
 }
 
 /// The paper's piecewise-linear scheme (default step), per λ.
 #[divan::bench(args = LAMBDAS)]
 fn integrate_sg_pl(bencher: Bencher, lam: f32) {
-    run(bencher, table(&[lam]), integrate_sg_piecewise_linear);
+    run(
+        bencher,
+        benchmark_inputs(&[lam]),
+        integrate_sg_piecewise_linear,
+    );
 }
 
 /// Gauss-Legendre orders over the whole table (45 calls), for accuracy per ns.
 #[divan::bench(args = [3, 4, 5, 6, 8])]
 fn variant_gl_order(bencher: Bencher, order: usize) {
-    run(bencher, table(&LAMBDAS), move |p, l, a, b, c| {
+    run(bencher, benchmark_inputs(&LAMBDAS), move |p, l, a, b, c| {
         integrate_sg_scheme(p, l, a, b, c, Scheme::GaussLegendre { order })
     });
 }
@@ -93,7 +78,7 @@ fn variant_gl_order(bencher: Bencher, order: usize) {
 /// Piecewise-linear knot steps over the whole table (45 calls), for accuracy per ns.
 #[divan::bench(args = [0.2, 0.1, 0.05, 0.025])]
 fn variant_pl_step(bencher: Bencher, step: f64) {
-    run(bencher, table(&LAMBDAS), move |p, l, a, b, c| {
+    run(bencher, benchmark_inputs(&LAMBDAS), move |p, l, a, b, c| {
         integrate_sg_scheme(p, l, a, b, c, Scheme::PiecewiseLinear { step })
     });
 }

@@ -19,7 +19,9 @@
 //! - [`image`]: image buffers, EXR/PNG I/O, tonemapping.
 //! - [`compare`]: error metrics and false-colour error maps.
 //! - [`export`]: Mitsuba 3 export of a loaded scene.
-//! - [`fsutil`]: atomic output files.
+//! - [`fsutil`]: atomic output files; [`hash`]: stable hashes for cache keys.
+//! - [`report`]: the comparison reports of `interreflect report` (planning, interpolation,
+//!   markdown).
 //! - [`memory`]: the memory budget and the estimate of a render's peak memory.
 #![forbid(unsafe_code)]
 // `!(x > 0.0)` is written on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
@@ -31,11 +33,13 @@ pub mod compare;
 pub mod cut;
 pub mod export;
 pub mod fsutil;
+pub mod hash;
 pub mod image;
 pub mod math;
 pub mod memory;
 pub mod precompute;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod transport;
 pub mod visibility;

@@ -116,6 +116,14 @@ pub fn physical_memory() -> Option<u64> {
     kib.checked_mul(1024)
 }
 
+/// This process's peak resident memory (`VmHWM` in `/proc/self/status`, Linux), if readable.
+pub fn peak_rss() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
 /// Parses a size: `off` (no budget), or a number with an optional unit — `B`, `K`/`KB`/`KiB`,
 /// `M`/`MB`/`MiB`, `G`/`GB`/`GiB`, `T`/`TB`/`TiB`, case-insensitive, all powers of 1024 (a
 /// memory budget is about RAM). A bare number is in bytes. `Some(bytes)`, or `None` for `off`.

@@ -1,8 +1,10 @@
 //! `interreflect compare`.
 
 use anyhow::{Context, bail};
-use interreflect::compare::{ErrorMapOptions, Metrics, error_map, metrics};
-use interreflect::image::{Image, read_exr, write_png_rgb8};
+use interreflect::compare::{
+    ErrorMapOptions, Metrics, box_filter, error_map, integer_factor, metrics,
+};
+use interreflect::image::{read_exr, write_png_rgb8};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -100,27 +102,4 @@ pub fn run(args: CompareArgs) -> anyhow::Result<i32> {
         }
     }
     Ok(if failed { 1 } else { 0 })
-}
-
-/// k > 1 when the reference is exactly k times the test image in both directions.
-fn integer_factor(test: &Image, reference: &Image) -> Option<u32> {
-    if test.width == 0 || test.height == 0 || reference.width <= test.width {
-        return None;
-    }
-    let k = reference.width / test.width;
-    (reference.width == k * test.width && reference.height == k * test.height).then_some(k)
-}
-
-/// Mean of each k×k block: the box-filtered image at 1/k the resolution (a box-filtered
-/// render's pixels average into the box-filtered pixels of the coarser image exactly).
-fn box_filter(img: &Image, k: u32) -> Image {
-    Image::from_fn(img.width / k, img.height / k, |x, y| {
-        let mut s = glam::DVec3::ZERO;
-        for j in 0..k {
-            for i in 0..k {
-                s += img.get(x * k + i, y * k + j).as_dvec3();
-            }
-        }
-        (s / f64::from(k * k)).as_vec3()
-    })
 }

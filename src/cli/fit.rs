@@ -336,6 +336,7 @@ fn slice_panel(
                 },
                 color: if shared_exact { PALETTE[6] } else { colour },
                 dashed: false,
+                markers: false,
                 points: th.iter().copied().zip(exact).collect(),
             });
         }
@@ -343,6 +344,7 @@ fn slice_panel(
             label: format!("{label} SG"),
             color: colour,
             dashed: true,
+            markers: false,
             points: th.iter().copied().zip(sg).collect(),
         });
     }
@@ -352,6 +354,7 @@ fn slice_panel(
         x_label: "θi (deg), mirror direction at +θo".into(),
         y_label: "f cos θi (1/sr)".into(),
         log_y: true,
+        log_x: false,
         x_range: Some((-90.0, 90.0)),
         y_range: Some((top * 1e-4, top)),
         x_ticks: vec![-90.0, -60.0, -30.0, 0.0, 30.0, 60.0, 90.0],
@@ -431,6 +434,7 @@ fn ndf_panel(alpha: f32) -> plot::Raster {
         label: "GGX D".into(),
         color: PALETTE[6],
         dashed: false,
+        markers: false,
         points: th
             .iter()
             .map(|&t| {
@@ -447,6 +451,7 @@ fn ndf_panel(alpha: f32) -> plot::Raster {
             label: format!("K={k}"),
             color: PALETTE[k - 1],
             dashed: true,
+            markers: false,
             points: th
                 .iter()
                 .map(|&t| {
@@ -470,6 +475,7 @@ fn ndf_panel(alpha: f32) -> plot::Raster {
         x_label: "θh (deg)".into(),
         y_label: "D (1/sr)".into(),
         log_y: true,
+        log_x: false,
         x_range: Some((0.0, 90.0)),
         y_range: Some((top * 1e-6, top)),
         x_ticks: vec![0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0],

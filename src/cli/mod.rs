@@ -8,6 +8,7 @@ macro_rules! outln {
     }};
 }
 
+mod bench;
 mod compare;
 mod envmap;
 mod fit;
@@ -16,6 +17,7 @@ mod mitsuba;
 mod progress;
 mod prt;
 mod render;
+mod report;
 mod sh_irradiance;
 mod single_triangle;
 
@@ -60,6 +62,14 @@ pub enum Command {
     /// Write a Mitsuba 3 scene (XML + PLY meshes) with the same camera, lights and materials,
     /// rendering direct light plus one bounce, to check the reference against (docs/mitsuba.md).
     ExportMitsuba(mitsuba::ExportMitsubaArgs),
+    /// Render scenes with every method against a cached reference and write comparison
+    /// reports: RESULTS/<scene>/report.md (images, error maps, metrics, equal time, equal
+    /// quality, error against time) and RESULTS/README.md (docs/report.md).
+    Report(report::ReportArgs),
+    /// The performance suite: tree build and frame time against triangle count, cut against
+    /// brute force, the SG integral against the machine's exp, the reference's paths per
+    /// second, GPU against its CPU twin; writes RESULTS/bench.md (docs/bench.md).
+    Bench(bench::BenchArgs),
 }
 
 /// Writes `text` to standard output; a closed pipe (`interreflect info ... | head`) is not an
@@ -88,5 +98,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::ShIrradiance(a) => sh_irradiance::run(a),
         Command::ConvertEnvmap(a) => envmap::run(a),
         Command::ExportMitsuba(a) => mitsuba::run(a),
+        Command::Report(a) => report::run(a),
+        Command::Bench(a) => bench::run(a),
     }
 }

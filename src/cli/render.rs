@@ -159,6 +159,10 @@ struct MemoryLog {
     budget_bytes: Option<u64>,
     /// The estimate's parts, in bytes.
     estimate: std::collections::BTreeMap<&'static str, u64>,
+    /// The process's peak resident memory when the outputs were written (Linux), for
+    /// comparing with the estimate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    peak_bytes: Option<u64>,
 }
 
 /// Reference-renderer fields of the log.
@@ -655,6 +659,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             estimate_bytes: estimate.total(),
             budget_bytes: budget.bytes,
             estimate: estimate.parts.iter().map(|&(n, b)| (n, b)).collect(),
+            peak_bytes: memory::peak_rss(),
         },
     };
     let text = serde_json::to_string_pretty(&log_data)? + "\n";

@@ -213,5 +213,28 @@ pub fn flip(test: &Image, reference: &Image, tm: &Tonemap) -> Result<f64, Compar
     Ok(sum / values.len() as f64)
 }
 
+/// k > 1 when the reference is exactly k times the test image in both directions.
+pub fn integer_factor(test: &Image, reference: &Image) -> Option<u32> {
+    if test.width == 0 || test.height == 0 || reference.width <= test.width {
+        return None;
+    }
+    let k = reference.width / test.width;
+    (reference.width == k * test.width && reference.height == k * test.height).then_some(k)
+}
+
+/// Mean of each k×k block: the box-filtered image at 1/k the resolution (a box-filtered
+/// render's pixels average into the box-filtered pixels of the coarser image exactly).
+pub fn box_filter(img: &Image, k: u32) -> Image {
+    Image::from_fn(img.width / k, img.height / k, |x, y| {
+        let mut s = glam::DVec3::ZERO;
+        for j in 0..k {
+            for i in 0..k {
+                s += img.get(x * k + i, y * k + j).as_dvec3();
+            }
+        }
+        (s / f64::from(k * k)).as_vec3()
+    })
+}
+
 #[cfg(test)]
 mod tests;

@@ -1,5 +1,5 @@
 //! A small line-plot renderer into an RGB8 buffer: axes, tick labels, axis labels, a title and
-//! a legend, linear or logarithmic y, solid or dashed lines. Text uses the 5×7 bitmap font of
+//! a legend, linear or logarithmic axes, solid or dashed lines, point markers. Text uses the 5×7 bitmap font of
 //! the error-map legend ([`super::font`]), extended here with the remaining ASCII letters, a few
 //! symbols and the Greek letters θ, α, λ, μ. Write the result with
 //! [`crate::image::write_png_rgb8`].
@@ -12,6 +12,9 @@ pub struct Series {
     pub label: String,
     pub color: [u8; 3],
     pub dashed: bool,
+    /// Draw a marker (a filled square) at every point, e.g. for measurements joined by a line
+    /// or a single point.
+    pub markers: bool,
     /// (x, y) points, drawn as a polyline in order. Non-finite points (and y ≤ 0 on a log
     /// axis) break the line.
     pub points: Vec<(f64, f64)>,
@@ -25,6 +28,8 @@ pub struct Plot {
     pub y_label: String,
     /// Logarithmic y axis (base 10).
     pub log_y: bool,
+    /// Logarithmic x axis (base 10); `x_ticks` are then ignored and powers of ten used.
+    pub log_x: bool,
     /// x range; `None`: the data range.
     pub x_range: Option<(f64, f64)>,
     /// y range; `None`: the data range (on a log axis at most 6 decades below the maximum).
@@ -299,19 +304,32 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
     let s = TEXT_SCALE;
     let ch = GLYPH_H * s;
     let tr = |v: f64| if plot.log_y { v.log10() } else { v };
+    let trx = |v: f64| if plot.log_x { v.log10() } else { v };
 
     // Data ranges.
     let pts = || {
         plot.series
             .iter()
             .flat_map(|s| s.points.iter())
-            .filter(|p| p.0.is_finite() && p.1.is_finite() && (!plot.log_y || p.1 > 0.0))
+            .filter(|p| {
+                p.0.is_finite()
+                    && p.1.is_finite()
+                    && (!plot.log_y || p.1 > 0.0)
+                    && (!plot.log_x || p.0 > 0.0)
+            })
     };
-    let (xlo, xhi) = plot.x_range.unwrap_or_else(|| {
+    let (mut xlo, mut xhi) = plot.x_range.unwrap_or_else(|| {
         pts().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
             (a.0.min(p.0), a.1.max(p.0))
         })
     });
+    if plot.log_x && xlo > 0.0 && xhi.is_finite() {
+        xlo = 10f64.powf(xlo.log10().floor());
+        xhi = 10f64.powf(xhi.log10().ceil());
+        if xhi <= xlo {
+            xhi = xlo * 10.0;
+        }
+    }
     let (mut ylo, mut yhi) = plot.y_range.unwrap_or_else(|| {
         let (lo, hi) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
             (a.0.min(p.1), a.1.max(p.1))
@@ -326,11 +344,14 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
     if plot.log_y {
         ylo = 10f64.powf(ylo.log10().floor());
     }
-    let (xlo, xhi) = if xlo.is_finite() && xhi > xlo {
+    let (xlo, xhi) = if xlo.is_finite() && xhi > xlo && (!plot.log_x || xlo > 0.0) {
         (xlo, xhi)
+    } else if plot.log_x {
+        (0.1, 1.0)
     } else {
         (0.0, 1.0)
     };
+    let (txlo, txhi) = (trx(xlo), trx(xhi));
     if !(ylo.is_finite() && yhi.is_finite() && yhi > ylo) {
         (ylo, yhi) = if plot.log_y { (0.1, 1.0) } else { (0.0, 1.0) };
     }
@@ -358,11 +379,18 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
         x1: (w as f64 - 16.0).max(1.0),
         y1: (h as f64 - (2 * ch + 26) as f64).max(1.0),
     };
-    let px = |x: f64| area.x0 + (x - xlo) / (xhi - xlo) * (area.x1 - area.x0);
+    let px = |x: f64| area.x0 + (trx(x) - txlo) / (txhi - txlo) * (area.x1 - area.x0);
     let py = |y: f64| area.y1 - (tr(y) - tlo) / (thi - tlo) * (area.y1 - area.y0);
 
     // Grid, ticks and tick labels.
-    let x_ticks = if plot.x_ticks.is_empty() {
+    let x_ticks = if plot.log_x {
+        let (a, b) = (txlo.ceil() as i32, txhi.floor() as i32);
+        let stride = ((b - a) / 7 + 1).max(1);
+        (a..=b)
+            .filter(|e| (e - a) % stride == 0)
+            .map(|e| 10f64.powi(e))
+            .collect()
+    } else if plot.x_ticks.is_empty() {
         linear_ticks(xlo, xhi)
     } else {
         plot.x_ticks.clone()
@@ -378,7 +406,7 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
         for y in 0..6 {
             put(&mut cv, x, area.y1 as i64 + y, INK);
         }
-        let l = tick_label(t, false);
+        let l = tick_label(t, plot.log_x);
         draw_text(
             &mut cv,
             x - text_width(&l, s) as i64 / 2,
@@ -425,7 +453,10 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
         let mut run = 0.0;
         let mut prev: Option<(f64, f64)> = None;
         for &(x, y) in &sr.points {
-            if !(x.is_finite() && y.is_finite()) || (plot.log_y && !(y > 0.0)) {
+            if !(x.is_finite() && y.is_finite())
+                || (plot.log_y && !(y > 0.0))
+                || (plot.log_x && !(x > 0.0))
+            {
                 prev = None;
                 continue;
             }
@@ -440,6 +471,21 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
             if let Some(q) = prev {
                 let dash = if sr.dashed { Some(&mut run) } else { None };
                 line(&mut cv, area, q, p, sr.color, dash);
+            }
+            if sr.markers {
+                let (cx, cy) = (p.0.round() as i64, p.1.round() as i64);
+                for dy in -3..=3 {
+                    for dx in -3..=3 {
+                        let (mx, my) = (cx + dx, cy + dy);
+                        if mx as f64 >= area.x0
+                            && mx as f64 <= area.x1
+                            && my as f64 >= area.y0
+                            && my as f64 <= area.y1
+                        {
+                            put(&mut cv, mx, my, sr.color);
+                        }
+                    }
+                }
             }
             prev = Some(p);
         }
@@ -521,6 +567,14 @@ pub fn render(plot: &Plot, width: u32, height: u32) -> Raster {
                 sr.color,
                 dash,
             );
+            if sr.markers {
+                let cx = lx + 8 + swatch as i64 / 2;
+                for dy in -3..=3 {
+                    for dx in -3..=3 {
+                        put(&mut cv, cx + dx, ym as i64 + dy, sr.color);
+                    }
+                }
+            }
             draw_text(&mut cv, lx + 16 + swatch as i64, y, &sr.label, s, INK);
         }
     }
@@ -570,6 +624,7 @@ mod tests {
                     label: "exact".into(),
                     color: PALETTE[0],
                     dashed: false,
+                    markers: false,
                     points: xs
                         .iter()
                         .map(|&x| (x, (-(x / 30.0).powi(2)).exp()))
@@ -579,6 +634,7 @@ mod tests {
                     label: "SG".into(),
                     color: PALETTE[1],
                     dashed: true,
+                    markers: false,
                     points: xs
                         .iter()
                         .map(|&x| (x, (-(x / 35.0).powi(2)).exp()))
@@ -624,6 +680,57 @@ mod tests {
             // Not mostly ink: still a plot on a white background.
             assert!(count(&r, 0..w, 0..h, BACKGROUND) > w * h / 2);
         }
+    }
+
+    /// On a log-log plot a point lands where its logarithms say: (10, 0.01) on axes spanning
+    /// [1, 100] × [1e-3, 1e-1] sits at the centre of the plotting area, drawn as a 7×7 marker.
+    #[test]
+    fn log_x_places_markers_by_their_logarithm() {
+        let p = Plot {
+            log_x: true,
+            log_y: true,
+            x_range: Some((1.0, 100.0)),
+            y_range: Some((1e-3, 1e-1)),
+            series: vec![Series {
+                label: String::new(),
+                color: PALETTE[2],
+                dashed: false,
+                markers: true,
+                points: vec![(10.0, 0.01)],
+            }],
+            ..Plot::default()
+        };
+        let r = render(&p, 400, 300);
+        let (w, h) = (r.width as usize, r.height as usize);
+        assert_eq!(count(&r, 0..w, 0..h, PALETTE[2]), 49);
+        let (mut sx, mut sy) = (0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                if r.pixels[y * w + x] == PALETTE[2] {
+                    (sx, sy) = (sx + x, sy + y);
+                }
+            }
+        }
+        let (cx, cy) = (sx as f64 / 49.0, sy as f64 / 49.0);
+        // The frame: the columns and rows that are ink over more than half the image.
+        let cols: Vec<usize> = (0..w)
+            .filter(|&x| count(&r, x..x + 1, 0..h, INK) > h / 2)
+            .collect();
+        let rows: Vec<usize> = (0..h)
+            .filter(|&y| count(&r, 0..w, y..y + 1, INK) > w / 2)
+            .collect();
+        let (x0, x1) = (cols[0] as f64, *cols.last().unwrap() as f64);
+        let (y0, y1) = (rows[0] as f64, *rows.last().unwrap() as f64);
+        // 2 px: the rounding of the frame and of the marker's centre.
+        assert!(
+            (cx - 0.5 * (x0 + x1)).abs() <= 2.0,
+            "x {cx} in [{x0}, {x1}]"
+        );
+        assert!(
+            (cy - 0.5 * (y0 + y1)).abs() <= 2.0,
+            "y {cy} in [{y0}, {y1}]"
+        );
+        assert_eq!(tick_label(100.0, true), "100");
     }
 
     #[test]

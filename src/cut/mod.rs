@@ -739,7 +739,7 @@ pub fn clamped_cosine_mean(c: f32, sharpness: f32) -> f32 {
 }
 
 /// erf (Abramowitz & Stegun 7.1.26, absolute error ≤ 1.5e-7).
-fn erf(x: f32) -> f32 {
+pub fn erf(x: f32) -> f32 {
     let t = 1.0 / (1.0 + 0.327_591_1 * x.abs());
     let y = 1.0
         - (((((1.061_405_4 * t - 1.453_152_1) * t) + 1.421_413_7) * t - 0.284_496_72) * t

@@ -83,6 +83,37 @@ pub fn solid_angle_f64(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     2.0 * det.abs().atan2(den)
 }
 
+/// A fixed table of realistic `integrate_sg` inputs (axis, λ, a, b, c) for benchmarks: per λ,
+/// small (0.01 rad), medium (0.1) and large (1 rad) triangles with the axis inside, just
+/// outside (1.5 radii from the centre) and 0.5 rad away.
+pub fn benchmark_inputs(lambdas: &[f32]) -> Vec<(Vec3, f32, Vec3, Vec3, Vec3)> {
+    // Rotates `c` by `angle` towards azimuth `az` in a fixed tangent frame.
+    let offset = |c: Vec3, az: f32, angle: f32| {
+        let t = if c.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+        let t = (t - c * c.dot(t)).normalize();
+        let b = c.cross(t);
+        (c * angle.cos() + (t * az.cos() + b * az.sin()) * angle.sin()).normalize()
+    };
+    let c = Vec3::new(0.3, -0.4, 0.87).normalize();
+    let mut out = Vec::new();
+    for &lam in lambdas {
+        for size in [0.01f32, 0.1, 1.0] {
+            let r = size / 3f32.sqrt();
+            let a = offset(c, 0.2, r);
+            let b = offset(c, 2.3, 0.8 * r);
+            let cc = offset(c, 4.3, 1.1 * r);
+            for p in [
+                offset(c, 1.0, 0.2 * r),
+                offset(c, 5.5, 1.5 * r),
+                offset(c, 3.3, r + 0.5),
+            ] {
+                out.push((p, lam, a, b, cc));
+            }
+        }
+    }
+    out
+}
+
 /// Solid angle of the spherical triangle with vertex directions a, b, c (normalised here; any
 /// winding): 2 atan2(|a·(b × c)|, 1 + a·b + b·c + c·a) (Van Oosterom & Strackee 1983),
 /// computed in f64. 0 for zero or non-finite vertices; never NaN.

@@ -24,6 +24,7 @@
 
 use crate::accel::Accel;
 use crate::brdf::Brdf;
+use crate::hash::Fnv;
 use crate::math::sampling::cosine_hemisphere;
 use crate::math::sh;
 use crate::math::{Frame, Rng};
@@ -437,28 +438,6 @@ pub enum CacheStatus {
 /// Bumped whenever the transfer's definition or the file layout changes.
 const CACHE_VERSION: &[u8] = b"interreflect-prt-v1";
 const MAGIC: &[u8; 8] = b"IRPRT001";
-
-/// FNV-1a, 64 bits: a stable hash (unlike std's) for cache keys.
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= x as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-    fn u64(&mut self, x: u64) {
-        self.bytes(&x.to_le_bytes());
-    }
-    fn f32s(&mut self, v: &[f32]) {
-        self.u64(v.len() as u64);
-        self.bytes(bytemuck::cast_slice(v));
-    }
-}
 
 /// Hash of everything the transfer depends on: geometry, normals, materials' albedos, the
 /// objects' reflector/receiver flags and the options — except the order: the SH basis is nested,

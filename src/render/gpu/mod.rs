@@ -2,9 +2,16 @@
 //! that imports wgpu. Each pass has one WGSL file under `shaders/` named after it and a Rust twin
 //! of the same name on the CPU, which the GPU tests compare it with.
 //!
-//! Passes so far: [`prt::relight`] (`shaders/prt_relight.wgsl`).
+//! Every pass's source is `shaders/shared/*.wgsl` (the layouts of [`layout`], mirrored, and the
+//! WGSL math twins) followed by its own file ([`shaders::source`]).
+//!
+//! Passes so far: [`prt::relight`] (`shaders/prt_relight.wgsl`) and [`twins::run`]
+//! (`shaders/math_twins.wgsl`, which runs the WGSL math functions over a table for the tests).
 
+pub mod layout;
 pub mod prt;
+pub mod shaders;
+pub mod twins;
 
 use std::sync::{Arc, Mutex};
 

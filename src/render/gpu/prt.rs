@@ -56,7 +56,9 @@ impl<'g> Relighter<'g> {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("prt_relight.wgsl"),
             source: wgpu::ShaderSource::Wgsl(
-                include_str!("../../../shaders/prt_relight.wgsl").into(),
+                super::shaders::source("prt_relight")
+                    .expect("a known pass")
+                    .into(),
             ),
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

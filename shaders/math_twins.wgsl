@@ -1,0 +1,39 @@
+// Runs one WGSL math function (shared/math.wgsl) over a table of inputs, for the GPU tests that
+// compare each with its Rust twin (`render::gpu::twins`). Prepended with shaders/shared/*.wgsl.
+
+@group(0) @binding(0) var<uniform> params: TwinParams;
+@group(0) @binding(1) var<storage, read> queries: array<TwinQuery>;
+@group(0) @binding(2) var<storage, read_write> results: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= params.count) {
+        return;
+    }
+    let q = queries[i];
+    var r = vec4<f32>(0.0);
+    switch params.function {
+        case 0u: {
+            r.x = lobe_integral(q.a.x);
+        }
+        case 1u: {
+            let a = GpuSg(q.a.xyz, q.a.w, q.b.xyz, 0.0);
+            let b = GpuSg(q.c.xyz, q.c.w, q.d.xyz, 0.0);
+            r = vec4<f32>(sg_inner_product(a, b), 0.0);
+        }
+        case 2u: {
+            r.x = chebyshev_upper_bound(q.a.xy, q.a.z, q.a.w);
+        }
+        case 3u: {
+            r.x = reduce_bleeding(q.a.x, q.a.y);
+        }
+        case 4u: {
+            r.x = clamped_cosine_mean(q.a.x, q.a.y);
+        }
+        default: {
+            r = vec4<f32>(-1.0);
+        }
+    }
+    results[i] = r;
+}

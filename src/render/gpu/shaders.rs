@@ -1,0 +1,41 @@
+//! The WGSL sources, assembled: every pass is `shaders/shared/*.wgsl` (the layouts mirrored from
+//! [`super::layout`] and the math twins) followed by the pass's own file, `shaders/<pass>.wgsl`.
+//! WGSL has no includes; this concatenation is the only way a pass gets the shared code.
+
+/// The shared files, in the order they are prepended.
+pub const SHARED: [(&str, &str); 2] = [
+    (
+        "shared/layout.wgsl",
+        include_str!("../../../shaders/shared/layout.wgsl"),
+    ),
+    (
+        "shared/math.wgsl",
+        include_str!("../../../shaders/shared/math.wgsl"),
+    ),
+];
+
+/// Every pass: (name = file stem = entry point, its own source).
+pub const PASSES: [(&str, &str); 2] = [
+    (
+        "prt_relight",
+        include_str!("../../../shaders/prt_relight.wgsl"),
+    ),
+    (
+        "math_twins",
+        include_str!("../../../shaders/math_twins.wgsl"),
+    ),
+];
+
+/// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.
+pub fn source(pass: &str) -> Option<String> {
+    let (_, own) = PASSES.iter().find(|(n, _)| *n == pass)?;
+    let mut s = String::new();
+    for (name, text) in SHARED {
+        s.push_str(&format!("// ---- shaders/{name}\n"));
+        s.push_str(text);
+        s.push('\n');
+    }
+    s.push_str(&format!("// ---- shaders/{pass}.wgsl\n"));
+    s.push_str(own);
+    Some(s)
+}

@@ -1,0 +1,183 @@
+//! The WGSL math functions (`shaders/shared/math.wgsl`) next to their Rust twins: [`run`]
+//! evaluates one of them on the GPU over a table of inputs (`shaders/math_twins.wgsl`), [`cpu`]
+//! evaluates the Rust twin of the same name over the same table, and the GPU tests compare them.
+
+use super::layout::{TwinParams, TwinQuery};
+use super::{Gpu, GpuError, describe};
+use crate::math::sg::{Sg, lobe_integral};
+use glam::{Vec2, Vec3};
+use wgpu::util::DeviceExt;
+
+/// A function with a WGSL twin; its index is the shader's `params.function`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Twin {
+    /// `math::sg::lobe_integral(a.x)`.
+    LobeIntegral = 0,
+    /// `Sg::inner_product`: lobe (a.xyz axis, a.w λ, b.xyz amplitude) with (c, d) likewise.
+    SgInnerProduct = 1,
+    /// `visibility::vsm::chebyshev_upper_bound((a.x, a.y), a.z, a.w)`.
+    ChebyshevUpperBound = 2,
+    /// `visibility::vsm::reduce_bleeding(a.x, a.y)`.
+    ReduceBleeding = 3,
+    /// `cut::clamped_cosine_mean(a.x, a.y)`.
+    ClampedCosineMean = 4,
+}
+
+impl Twin {
+    pub const ALL: [Twin; 5] = [
+        Twin::LobeIntegral,
+        Twin::SgInnerProduct,
+        Twin::ChebyshevUpperBound,
+        Twin::ReduceBleeding,
+        Twin::ClampedCosineMean,
+    ];
+
+    /// The WGSL function's name (the Rust twin's, a method `T::f` as `t_f`).
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            Twin::LobeIntegral => "lobe_integral",
+            Twin::SgInnerProduct => "sg_inner_product",
+            Twin::ChebyshevUpperBound => "chebyshev_upper_bound",
+            Twin::ReduceBleeding => "reduce_bleeding",
+            Twin::ClampedCosineMean => "clamped_cosine_mean",
+        }
+    }
+}
+
+fn v3(a: [f32; 4]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+/// The Rust twin of `twin` on one row (unused result lanes are 0).
+pub fn cpu(twin: Twin, q: &TwinQuery) -> [f32; 4] {
+    let one = |x: f32| [x, 0.0, 0.0, 0.0];
+    match twin {
+        Twin::LobeIntegral => one(lobe_integral(q.a[0])),
+        Twin::SgInnerProduct => {
+            let a = Sg::new(v3(q.a), q.a[3], v3(q.b));
+            let b = Sg::new(v3(q.c), q.c[3], v3(q.d));
+            let r = a.inner_product(&b);
+            [r.x, r.y, r.z, 0.0]
+        }
+        Twin::ChebyshevUpperBound => one(crate::visibility::vsm::chebyshev_upper_bound(
+            Vec2::new(q.a[0], q.a[1]),
+            q.a[2],
+            q.a[3],
+        )),
+        Twin::ReduceBleeding => one(crate::visibility::vsm::reduce_bleeding(q.a[0], q.a[1])),
+        Twin::ClampedCosineMean => one(crate::cut::clamped_cosine_mean(q.a[0], q.a[1])),
+    }
+}
+
+fn failed(reason: impl Into<String>) -> GpuError {
+    GpuError::Failed {
+        what: "math twins".into(),
+        reason: reason.into(),
+    }
+}
+
+/// The WGSL twin of `twin` over `queries`, on the GPU.
+pub fn run(gpu: &Gpu, twin: Twin, queries: &[TwinQuery]) -> Result<Vec<[f32; 4]>, GpuError> {
+    if queries.is_empty() {
+        return Ok(Vec::new());
+    }
+    let bytes = std::mem::size_of_val(queries) as u64;
+    if bytes > gpu.max_binding {
+        return Err(failed(format!(
+            "{} rows ({bytes} bytes) exceed the largest binding ({} bytes)",
+            queries.len(),
+            gpu.max_binding
+        )));
+    }
+    if queries.len() > 65_535 * 64 {
+        return Err(failed(format!(
+            "{} rows: at most {} per dispatch",
+            queries.len(),
+            65_535 * 64
+        )));
+    }
+    let device = &gpu.device;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("math_twins.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(
+            super::shaders::source("math_twins")
+                .expect("a known pass")
+                .into(),
+        ),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("math_twins"),
+        layout: None,
+        module: &module,
+        entry_point: Some("math_twins"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let params = TwinParams {
+        function: twin as u32,
+        count: queries.len() as u32,
+        _pad0: 0,
+        _pad1: 0,
+    };
+    let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("twin params"),
+        contents: bytemuck::bytes_of(&params),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let query_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("twin queries"),
+        contents: bytemuck::cast_slice(queries),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let out_bytes = (queries.len() * 16) as u64;
+    let out = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("twin results"),
+        size: out_bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: query_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: out.as_entire_binding(),
+            },
+        ],
+    });
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("math_twins"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([enc.finish()]);
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(failed(describe(&e)));
+    }
+    let data = gpu.read_back(&out, out_bytes, "math twins")?;
+    gpu.check("math twins")?;
+    // Byte-wise: the read-back Vec<u8> need not be aligned for f32.
+    let floats: Vec<f32> = data
+        .chunks_exact(4)
+        .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    Ok(floats
+        .chunks_exact(4)
+        .map(|v| [v[0], v[1], v[2], v[3]])
+        .collect())
+}

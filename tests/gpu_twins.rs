@@ -1,0 +1,186 @@
+//! Every WGSL math function against its Rust twin over the same table of inputs, on the GPU
+//! (lavapipe in CI; `CI=true` makes a missing adapter a failure, otherwise the test skips with a
+//! note).
+
+use interreflect::math::sampling::Rng;
+use interreflect::render::gpu::layout::TwinQuery;
+use interreflect::render::gpu::twins::{Twin, cpu, run};
+use interreflect::render::gpu::{Gpu, adapter_required};
+
+fn gpu() -> Option<Gpu> {
+    match Gpu::new() {
+        Ok(g) => Some(g),
+        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
+        Err(e) => {
+            eprintln!("skipped: {e}");
+            None
+        }
+    }
+}
+
+fn unit(rng: &mut Rng) -> [f32; 3] {
+    loop {
+        let v = [
+            2.0 * rng.f32() - 1.0,
+            2.0 * rng.f32() - 1.0,
+            2.0 * rng.f32() - 1.0,
+        ];
+        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if l > 0.1 && l <= 1.0 {
+            return [v[0] / l, v[1] / l, v[2] / l];
+        }
+    }
+}
+
+/// λ log-uniform in [10^lo, 10^hi].
+fn log_uniform(rng: &mut Rng, lo: f32, hi: f32) -> f32 {
+    10f32.powf(lo + (hi - lo) * rng.f32())
+}
+
+fn row(a: [f32; 4]) -> TwinQuery {
+    TwinQuery {
+        a,
+        ..TwinQuery::default()
+    }
+}
+
+/// The table of each twin: edge cases, then random rows.
+fn table(t: Twin) -> Vec<TwinQuery> {
+    let mut rng = Rng::keyed(7, t as u64, 0);
+    let mut out = Vec::new();
+    match t {
+        Twin::LobeIntegral => {
+            for l in [
+                0.0, 1e-7, 1e-4, 4e-3, 0.01, 0.1, 0.5, 1.0, 2.133, 10.0, 1e2, 1e3, 1e4, 1e5,
+            ] {
+                out.push(row([l, 0.0, 0.0, 0.0]));
+            }
+            for _ in 0..500 {
+                out.push(row([log_uniform(&mut rng, -4.0, 5.0), 0.0, 0.0, 0.0]));
+            }
+        }
+        Twin::SgInnerProduct => {
+            for i in 0..1000 {
+                let p1 = unit(&mut rng);
+                // Every 4th pair nearly aligned (sharp products), the rest random.
+                let p2 = if i % 4 == 0 {
+                    let d = unit(&mut rng);
+                    let e = 0.02 * rng.f32();
+                    let v = [p1[0] + e * d[0], p1[1] + e * d[1], p1[2] + e * d[2]];
+                    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                    [v[0] / l, v[1] / l, v[2] / l]
+                } else {
+                    unit(&mut rng)
+                };
+                let (l1, l2) = (
+                    log_uniform(&mut rng, -2.0, 4.0),
+                    log_uniform(&mut rng, -2.0, 4.0),
+                );
+                let amp = |rng: &mut Rng| [2.0 * rng.f32(), 2.0 * rng.f32(), 2.0 * rng.f32(), 0.0];
+                out.push(TwinQuery {
+                    a: [p1[0], p1[1], p1[2], l1],
+                    b: amp(&mut rng),
+                    c: [p2[0], p2[1], p2[2], l2],
+                    d: amp(&mut rng),
+                });
+            }
+        }
+        Twin::ChebyshevUpperBound => {
+            for _ in 0..1000 {
+                let mu = 10.0 * rng.f32();
+                let var = 0.5 * rng.f32() * rng.f32();
+                let t = mu + 2.0 * (rng.f32() - 0.3);
+                out.push(row([mu, mu * mu + var, t, 1e-6]));
+            }
+        }
+        Twin::ReduceBleeding => {
+            for b in [0.0, 0.2, 0.5, 0.9] {
+                for i in 0..=100 {
+                    out.push(row([i as f32 / 100.0, b, 0.0, 0.0]));
+                }
+            }
+        }
+        Twin::ClampedCosineMean => {
+            for c in [-1.0, -0.5, 0.0, 1e-4, 0.5, 1.0] {
+                for l in [0.0, 1e-3, 2.133, 100.0, 1e5] {
+                    out.push(row([c, l, 0.0, 0.0]));
+                }
+            }
+            for _ in 0..1000 {
+                out.push(row([
+                    2.0 * rng.f32() - 1.0,
+                    log_uniform(&mut rng, -3.0, 5.0),
+                    0.0,
+                    0.0,
+                ]));
+            }
+        }
+    }
+    out
+}
+
+/// (relative, absolute) tolerance per twin, with why.
+fn tolerance(t: Twin) -> (f32, f32) {
+    match t {
+        // f32 exp on the GPU (Vulkan allows 3 + 2|x| ulp; lavapipe's is near 1 ulp) against an
+        // f64 evaluation rounded once: 1e-5 relative is ~100 ulp of headroom.
+        Twin::LobeIntegral => (1e-5, 0.0),
+        // The exponent −λ1λ2|p1 − p2|²/(λ + λ1 + λ2) in f32 (the Rust twin is f64) reaches
+        // tens for these sharpnesses: its rounding, ~1e-7 × |exponent|, becomes a relative error
+        // of the result of the same size, 1e-5 at |exponent| = 100; results below 1e-30 are 0 on
+        // one side or the other.
+        Twin::SgInnerProduct => (1e-4, 1e-30),
+        // The same f32 formulas on both sides: only contraction into FMAs differs.
+        Twin::ChebyshevUpperBound | Twin::ReduceBleeding => (1e-6, 1e-7),
+        // The same f32 formula with two exps: a few ulp of each.
+        Twin::ClampedCosineMean => (1e-5, 1e-6),
+    }
+}
+
+#[test]
+fn every_wgsl_math_function_matches_its_rust_twin() {
+    let Some(gpu) = gpu() else { return };
+    for t in Twin::ALL {
+        let rows = table(t);
+        let g = run(&gpu, t, &rows).unwrap_or_else(|e| panic!("{}: {e}", t.wgsl_name()));
+        assert_eq!(g.len(), rows.len());
+        let (rel, abs) = tolerance(t);
+        let mut worst = 0.0f32;
+        for (q, gv) in rows.iter().zip(&g) {
+            let cv = cpu(t, q);
+            for k in 0..4 {
+                let err = (gv[k] - cv[k]).abs();
+                let allowed = rel * cv[k].abs() + abs;
+                assert!(
+                    err <= allowed && gv[k].is_finite(),
+                    "{}: row {q:?}: GPU {} against Rust {} (lane {k})",
+                    t.wgsl_name(),
+                    gv[k],
+                    cv[k]
+                );
+                // The relative difference where it means something (well above `abs`).
+                if cv[k].abs() > 1e3 * abs.max(1e-30) {
+                    worst = worst.max(err / cv[k].abs());
+                }
+            }
+        }
+        eprintln!(
+            "{}: {} rows, largest relative difference {worst:.2e}",
+            t.wgsl_name(),
+            rows.len()
+        );
+    }
+}
+
+/// The comparison is not vacuous: a twin evaluated on the wrong function differs.
+#[test]
+fn a_wrong_function_is_detected() {
+    let Some(gpu) = gpu() else { return };
+    let rows = table(Twin::ClampedCosineMean);
+    let g = run(&gpu, Twin::LobeIntegral, &rows).unwrap();
+    let differs = rows
+        .iter()
+        .zip(&g)
+        .any(|(q, gv)| (gv[0] - cpu(Twin::ClampedCosineMean, q)[0]).abs() > 1e-3);
+    assert!(differs);
+}
