@@ -31,6 +31,9 @@ fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
         case 4u: {
             r.x = clamped_cosine_mean(q.a.x, q.a.y);
         }
+        case 5u: {
+            r.x = integrate_sg(q.a.xyz, q.a.w, q.b.xyz, q.c.xyz, q.d.xyz);
+        }
         default: {
             r = vec4<f32>(-1.0);
         }

@@ -80,3 +80,260 @@ fn clamped_cosine_mean(c: f32, sharpness: f32) -> f32 {
     let cdf = 0.5 * (1.0 + erf(z * 0.70710678));
     return clamp(c * cdf + sigma * pdf, 0.0, 1.0);
 }
+
+// ---- The integral of an SG over a spherical triangle (`math::spherical_triangle`), in f32.
+// The Rust twin `integrate_sg` computes in f64; the algorithm is the same: the signed
+// decomposition into one edge triangle P X Y per edge around the axis P, the closed radial part
+// h(x) = (1 − e^{−λx})/λ, and the azimuthal integral by Gauss–Legendre of order 5 in
+// t = tan(σ/2) (near half) or cot(σ/2) (far half), split where y = λx passes fixed offsets.
+
+const TAU: f32 = 6.28318530717959;
+const HALF_PI: f32 = 1.5707963267949;
+
+// Solid angle of the spherical triangle a, b, c (unit vectors), Van Oosterom & Strackee.
+fn solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    let num = abs(dot(a, cross(b, c)));
+    let den = 1.0 + dot(a, b) + dot(b, c) + dot(c, a);
+    return 2.0 * atan2(num, den);
+}
+
+struct EdgeFrame {
+    s0: f32,
+    k: f32,
+    x0: f32,
+    lam: f32,
+}
+
+fn edge_h(f: EdgeFrame, x: f32) -> f32 {
+    return -expm1(-f.lam * x) / f.lam;
+}
+
+fn gl_integrand(f: EdgeFrame, t: f32, far: bool) -> f32 {
+    let t2 = t * t;
+    let q = 1.0 + t2;
+    let w = 1.0 - t2;
+    let jac = 2.0 * f.s0 * q / (f.s0 * f.s0 * w * w + 4.0 * t2);
+    let r = f.x0 + 2.0 * f.k * t2 / q;
+    if (far) {
+        return exp(-f.lam * (2.0 - r)) * expm1(-f.lam * r) / f.lam * jac;
+    }
+    return edge_h(f, r) * jac;
+}
+
+// Gauss–Legendre of order 5 over t ∈ [a, b].
+fn gl_piece(f: EdgeFrame, a: f32, b: f32, far: bool) -> f32 {
+    let half = 0.5 * (b - a);
+    let mid = 0.5 * (a + b);
+    var s = 0.56888888888888889 * gl_integrand(f, mid, far);
+    s += 0.47862867049936647 * (gl_integrand(f, mid - half * 0.53846931010568309, far)
+        + gl_integrand(f, mid + half * 0.53846931010568309, far));
+    s += 0.23692688505618909 * (gl_integrand(f, mid - half * 0.90617984593866399, far)
+        + gl_integrand(f, mid + half * 0.90617984593866399, far));
+    return s * half;
+}
+
+fn gl_r_at(f: EdgeFrame, t: f32) -> f32 {
+    return f.x0 + 2.0 * f.k * t * t / (1.0 + t * t);
+}
+
+fn gl_t_at(f: EdgeFrame, r: f32) -> f32 {
+    let u = clamp((r - f.x0) / (2.0 * f.k), 0.0, 0.5);
+    return sqrt(u / (1.0 - u));
+}
+
+fn gl_x_at(f: EdgeFrame, t: f32, far: bool) -> f32 {
+    let r = gl_r_at(f, t);
+    return select(r, 2.0 - r, far);
+}
+
+fn gl_side(f: EdgeFrame, t_start: f32, t_end: f32, far: bool) -> f32 {
+    var offsets = array<f32, 5>(2.5, 6.0, 12.0, 22.0, 40.0);
+    let y_start = f.lam * gl_x_at(f, t_start, far);
+    let y_end = f.lam * gl_x_at(f, t_end, far);
+    let lo = min(t_start, t_end);
+    let hi = max(t_start, t_end);
+    let dir = select(1.0, -1.0, far);
+    var total = 0.0;
+    var t = t_start;
+    for (var i = 0u; i < 5u; i = i + 1u) {
+        let y = y_start + offsets[i];
+        if (y >= y_end || !(f.k > 0.0)) {
+            return total + dir * gl_piece(f, t, t_end, far);
+        }
+        let x = y / f.lam;
+        let t_next = clamp(gl_t_at(f, select(x, 2.0 - x, far)), lo, hi);
+        total += dir * gl_piece(f, t, t_next, far);
+        t = t_next;
+    }
+    if (!far) {
+        let psi_end = atan2(2.0 * t_end, f.s0 * (1.0 - t_end * t_end));
+        let psi_t = atan2(2.0 * t, f.s0 * (1.0 - t * t));
+        total += (psi_end - psi_t) / f.lam;
+    }
+    return total;
+}
+
+// tan(σ/2) for cos ψ ≥ 0 and cot(σ/2) for cos ψ ≤ 0.
+fn gl_t_of(f: EdgeFrame, p: f32) -> f32 {
+    let sp = sin(p);
+    let cp = cos(p);
+    let a = f.s0 * sp;
+    let r = sqrt(a * a + cp * cp);
+    let den = r + abs(cp);
+    if (den > 0.0) {
+        return min(a / den, 1.0);
+    }
+    return 1.0;
+}
+
+fn gl_monotone(f: EdgeFrame, pa: f32, pb: f32) -> f32 {
+    var total = 0.0;
+    if (pa < HALF_PI) {
+        var tb = 1.0;
+        if (pb < HALF_PI) {
+            tb = gl_t_of(f, pb);
+        }
+        total += gl_side(f, gl_t_of(f, pa), tb, false);
+    }
+    if (pb > HALF_PI) {
+        let pf = max(pa, HALF_PI);
+        total += edge_h(f, 2.0) * (pb - pf);
+        var ta = 1.0;
+        if (pa > HALF_PI) {
+            ta = gl_t_of(f, pa);
+        }
+        total += gl_side(f, ta, gl_t_of(f, pb), true);
+    }
+    return total;
+}
+
+// Distance of t from the nearest multiple of 2π, in [0, π].
+fn fold_angle(t: f32) -> f32 {
+    return abs(t - TAU * round(t / TAU));
+}
+
+struct EdgeResult {
+    integral: f32,
+    dpsi: f32,
+    xmin: f32,
+}
+
+fn edge_monotone(f: EdgeFrame, a: f32, b: f32, xmin: ptr<function, f32>) -> f32 {
+    let fa0 = fold_angle(a);
+    let fb0 = fold_angle(b);
+    let fa = min(fa0, fb0);
+    let fb = max(fa0, fb0);
+    if (fb > fa) {
+        if (fa == 0.0) {
+            *xmin = f.x0;
+        }
+        return gl_monotone(f, fa, fb);
+    }
+    return 0.0;
+}
+
+fn edge_integral(p: vec3<f32>, lam: f32, x: vec3<f32>, y: vec3<f32>) -> EdgeResult {
+    var skip = EdgeResult(0.0, 0.0, 3.0e38);
+    let cx = cross(p, x);
+    let cy = cross(p, y);
+    if (dot(cx, cx) < 1e-14 || dot(cy, cy) < 1e-14) {
+        return skip;
+    }
+    let n = cross(x, y);
+    let nlen = length(n);
+    let det = dot(p, n);
+    if (!(nlen > 0.0) || det == 0.0) {
+        return skip;
+    }
+    let dpsi = atan2(det, dot(cx, cy));
+    let m = n * (sign(det) / nlen);
+    let s0 = clamp(dot(p, m), 0.0, 1.0);
+    let q = p * s0 - m;
+    let k = length(q);
+    var u: vec3<f32>;
+    if (k > 1e-30) {
+        u = q / k;
+    } else {
+        var t = vec3<f32>(0.0, 1.0, 0.0);
+        if (abs(p.x) < 0.9) {
+            t = vec3<f32>(1.0, 0.0, 0.0);
+        }
+        u = normalize(t - p * dot(p, t));
+    }
+    let v = cross(p, u);
+    let psi_x = atan2(dot(x, v), dot(x, u));
+    let psi_y = psi_x + dpsi;
+    let f = EdgeFrame(s0, k, s0 * s0 / (1.0 + k), lam);
+    let lo = min(psi_x, psi_y);
+    let hi = max(psi_x, psi_y);
+    let j = ceil(lo / PI);
+    let mid = j * PI;
+    var xmin = 3.0e38;
+    var total = 0.0;
+    if (mid > lo && mid < hi) {
+        total += edge_monotone(f, lo, mid, &xmin);
+        total += edge_monotone(f, mid, hi, &xmin);
+    } else {
+        total += edge_monotone(f, lo, hi, &xmin);
+    }
+    return EdgeResult(sign(dpsi) * total, dpsi, xmin);
+}
+
+// ∫_{ABC} exp(λ (ω·axis − 1)) dω (`math::spherical_triangle::integrate_sg`): the vertices need
+// not be unit; either winding; never NaN or negative, never above the solid angle.
+fn integrate_sg(axis: vec3<f32>, sharpness: f32, a_in: vec3<f32>, b_in: vec3<f32>, c_in: vec3<f32>) -> f32 {
+    let la = length(a_in);
+    let lb = length(b_in);
+    let lc = length(c_in);
+    if (!(la > 0.0 && lb > 0.0 && lc > 0.0)) {
+        return 0.0;
+    }
+    let a = a_in / la;
+    var b = b_in / lb;
+    var c = c_in / lc;
+    let lam = max(sharpness, 0.0);
+    let lp = length(axis);
+    let omega = solid_angle(a, b, c);
+    if (!(lp > 0.0)) {
+        return select(0.0, omega, lam == 0.0);
+    }
+    let p = axis / lp;
+    if (!(omega > 0.0)) {
+        return 0.0;
+    }
+    if (lam == 0.0) {
+        return omega;
+    }
+    if (dot(a, cross(b, c)) < 0.0) {
+        let t = b;
+        b = c;
+        c = t;
+    }
+    var xmin = min(0.5 * dot(a - p, a - p), min(0.5 * dot(b - p, b - p), 0.5 * dot(c - p, c - p)));
+    var sum = 0.0;
+    var wind = 0.0;
+    let e0 = edge_integral(p, lam, a, b);
+    let e1 = edge_integral(p, lam, b, c);
+    let e2 = edge_integral(p, lam, c, a);
+    sum = e0.integral + e1.integral + e2.integral;
+    wind = e0.dpsi + e1.dpsi + e2.dpsi;
+    xmin = min(xmin, min(e0.xmin, min(e1.xmin, e2.xmin)));
+    let lobe = lobe_integral(lam);
+    let w = wind / TAU;
+    var frac = -w;
+    if (w < -0.999999) {
+        frac = 1.0;
+    } else if (w > -1e-6) {
+        frac = 0.0;
+    }
+    if (w > 0.25) {
+        xmin = 0.0;
+    }
+    let result = sum + frac * lobe;
+    let upper = omega * exp(-lam * xmin);
+    let lower = omega * exp(-2.0 * lam);
+    if (result != result) {
+        return lower;
+    }
+    return clamp(result, lower, upper);
+}

@@ -21,15 +21,18 @@ pub enum Twin {
     ReduceBleeding = 3,
     /// `cut::clamped_cosine_mean(a.x, a.y)`.
     ClampedCosineMean = 4,
+    /// `math::spherical_triangle::integrate_sg(a.xyz axis, a.w λ, b.xyz, c.xyz, d.xyz)`.
+    IntegrateSg = 5,
 }
 
 impl Twin {
-    pub const ALL: [Twin; 5] = [
+    pub const ALL: [Twin; 6] = [
         Twin::LobeIntegral,
         Twin::SgInnerProduct,
         Twin::ChebyshevUpperBound,
         Twin::ReduceBleeding,
         Twin::ClampedCosineMean,
+        Twin::IntegrateSg,
     ];
 
     /// The WGSL function's name (the Rust twin's, a method `T::f` as `t_f`).
@@ -40,6 +43,7 @@ impl Twin {
             Twin::ChebyshevUpperBound => "chebyshev_upper_bound",
             Twin::ReduceBleeding => "reduce_bleeding",
             Twin::ClampedCosineMean => "clamped_cosine_mean",
+            Twin::IntegrateSg => "integrate_sg",
         }
     }
 }
@@ -66,6 +70,13 @@ pub fn cpu(twin: Twin, q: &TwinQuery) -> [f32; 4] {
         )),
         Twin::ReduceBleeding => one(crate::visibility::vsm::reduce_bleeding(q.a[0], q.a[1])),
         Twin::ClampedCosineMean => one(crate::cut::clamped_cosine_mean(q.a[0], q.a[1])),
+        Twin::IntegrateSg => one(crate::math::spherical_triangle::integrate_sg(
+            v3(q.a),
+            q.a[3],
+            v3(q.b),
+            v3(q.c),
+            v3(q.d),
+        )),
     }
 }
 
