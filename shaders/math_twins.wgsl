@@ -4,6 +4,9 @@
 @group(0) @binding(0) var<uniform> params: TwinParams;
 @group(0) @binding(1) var<storage, read> queries: array<TwinQuery>;
 @group(0) @binding(2) var<storage, read_write> results: array<vec4<f32>>;
+// The node-bound twin's rows: a node and a receiver each, the point in `queries[i].a.xyz`.
+@group(0) @binding(3) var<storage, read> nodes: array<GpuNodeBound>;
+@group(0) @binding(4) var<storage, read> receivers: array<GpuReceiver>;
 
 @compute @workgroup_size(64)
 fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -33,6 +36,9 @@ fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         case 5u: {
             r.x = integrate_sg(q.a.xyz, q.a.w, q.b.xyz, q.c.xyz, q.d.xyz);
+        }
+        case 6u: {
+            r = vec4<f32>(node_bound(nodes[i], q.a.xyz, receivers[i]), 0.0);
         }
         default: {
             r = vec4<f32>(-1.0);

@@ -26,3 +26,29 @@ struct TwinParams {
     _pad0: u32,
     _pad1: u32,
 }
+
+// What the cut's error bound needs of a tree node (`cut::node_bound`).
+struct GpuNodeBound {
+    bbox_min: vec3<f32>,
+    has_cone: f32,
+    bbox_max: vec3<f32>,
+    cone_half_angle: f32,
+    cone_axis: vec3<f32>,
+    _pad0: f32,
+    image_min: vec3<f32>,
+    _pad1: f32,
+    image_max: vec3<f32>,
+    _pad2: f32,
+    diffuse: vec3<f32>,
+    _pad3: f32,
+    peak_by_sharpness: array<vec4<f32>, 6>,
+}
+
+// A receiver point's BRDF lobes (`transport::receiver::ReceiverLobes`).
+struct GpuReceiver {
+    normal: vec3<f32>,
+    stretch: f32,
+    diffuse: vec3<f32>,
+    lobe_count: u32,
+    lobes: array<GpuSg, 4>,
+}

@@ -337,3 +337,92 @@ fn integrate_sg(axis: vec3<f32>, sharpness: f32, a_in: vec3<f32>, b_in: vec3<f32
     }
     return clamp(result, lower, upper);
 }
+
+// ---- The cut's error bound (`cut::node_bound`): an upper bound of the summed SG contribution
+// of a node's triangles at receiver x (visibility ignored). See docs/sg-renderer.md.
+
+// cos γ − 1 as −2 sin²(γ/2), without cancellation (`cut::cos_minus_one`).
+fn cos_minus_one(g: f32) -> f32 {
+    let s = sin(0.5 * g);
+    return -2.0 * s * s;
+}
+
+// The angle between two vectors, robust for small and large angles.
+fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return atan2(length(cross(a, b)), dot(a, b));
+}
+
+fn node_bound(n: GpuNodeBound, x: vec3<f32>, rx: GpuReceiver) -> vec3<f32> {
+    let lo = n.bbox_min;
+    let hi = n.bbox_max;
+    // Entirely below the receiver's horizon: nothing arrives.
+    var above = false;
+    for (var i = 0u; i < 8u; i = i + 1u) {
+        let corner = vec3<f32>(
+            select(hi.x, lo.x, (i & 1u) == 0u),
+            select(hi.y, lo.y, (i & 2u) == 0u),
+            select(hi.z, lo.z, (i & 4u) == 0u),
+        );
+        if (dot(rx.normal, corner - x) > 0.0) {
+            above = true;
+        }
+    }
+    if (!above) {
+        return vec3<f32>(0.0);
+    }
+    let dd = clamp(x, lo, hi) - x;
+    let d2 = dot(dd, dd);
+    if (!(d2 > 0.0)) {
+        return vec3<f32>(3.0e38);
+    }
+    let centre = 0.5 * (lo + hi);
+    let radius = 0.5 * length(hi - lo);
+    let to_c = centre - x;
+    let dist = length(to_c);
+    let has_cone = dist > radius;
+    var dir = vec3<f32>(0.0, 0.0, 1.0);
+    var half = 0.0;
+    if (has_cone) {
+        dir = to_c / dist;
+        half = asin(radius / dist);
+    }
+    var hmax = rx.diffuse;
+    let widest = 1.0 / rx.stretch;
+    for (var i = 0u; i < rx.lobe_count; i = i + 1u) {
+        let h = rx.lobes[i];
+        if (has_cone) {
+            let gap = max(angle_between(h.axis, dir) - half, 0.0);
+            hmax += h.amplitude * exp(min(h.sharpness * widest * cos_minus_one(gap), 0.0));
+        } else {
+            hmax += h.amplitude;
+        }
+    }
+    var has_gap = false;
+    var gap = 0.0;
+    if (has_cone && n.image_min.x <= n.image_max.x) {
+        let ic = 0.5 * (n.image_min + n.image_max);
+        let ir = 0.5 * length(n.image_max - n.image_min);
+        let to_i = ic - x;
+        let di = length(to_i);
+        if (di > ir) {
+            has_gap = true;
+            gap = max(angle_between(dir, to_i / di) - half - asin(ir / di), 0.0);
+        }
+    }
+    var edges = array<f32, 6>(0.0, 2.0, 8.0, 32.0, 128.0, 512.0);
+    var radiance = n.diffuse;
+    for (var b = 0u; b < 6u; b = b + 1u) {
+        var f = 1.0;
+        if (has_gap) {
+            f = exp(min(edges[b] * cos_minus_one(gap), 0.0));
+        }
+        radiance += n.peak_by_sharpness[b].xyz * f;
+    }
+    var cos_max = 1.0;
+    if (has_cone && n.has_cone > 0.0) {
+        var g = angle_between(n.cone_axis, dir);
+        g = min(g, PI - g);
+        cos_max = cos(max(g - n.cone_half_angle - half, 0.0));
+    }
+    return radiance * hmax * (1.001 * cos_max / d2);
+}

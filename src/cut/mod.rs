@@ -621,7 +621,7 @@ impl<'a> LitScene<'a> {
 /// re-aimed at x, peak towards x → its light image and have at least their own sharpness (the
 /// re-aiming only sharpens), so over the node they are at most exp(λ_min (cos γ − 1)) with γ the
 /// smallest angle at x between the node's bounding sphere and the images' bounding sphere.
-fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
+pub fn node_bound(n: &Node, lit: &LitNode, x: Vec3, rx: &ReceiverLobes) -> Vec3 {
     node_bound_parts(n, lit, x, rx, None)
 }
 
@@ -669,7 +669,7 @@ fn node_bound_parts(
             let widest = 1.0 / rx.stretch();
             for h in rx.lobes() {
                 let gap = (angle(h.axis, dir) - half).max(0.0);
-                hmax += h.amplitude * (h.sharpness * widest * (gap.cos() - 1.0)).min(0.0).exp();
+                hmax += h.amplitude * (h.sharpness * widest * cos_minus_one(gap)).min(0.0).exp();
             }
         }
         None => {
@@ -695,7 +695,7 @@ fn node_bound_parts(
     let mut radiance = lit.diffuse;
     for (edge, peak) in SHARPNESS_BINS.iter().zip(&lit.peak_by_sharpness) {
         let f = match gap {
-            Some(g) => (edge * (g.cos() - 1.0)).min(0.0).exp(),
+            Some(g) => (edge * cos_minus_one(g)).min(0.0).exp(),
             None => 1.0,
         };
         radiance += *peak * f;
@@ -720,6 +720,14 @@ fn node_bound_parts(
     }
     // 1e-3: headroom for the rounding of the f32 sums and of the quadrature (≤ 5e-7 relative).
     radiance * hmax * (1.001 * cos_max / d2)
+}
+
+/// cos γ − 1 as −2 sin²(γ/2): exact to rounding for small γ, where cos γ − 1 would cancel (and
+/// an exponent λ (cos γ − 1) of a sharp lobe magnify the cancellation).
+#[inline]
+pub fn cos_minus_one(g: f32) -> f32 {
+    let s = (0.5 * g).sin();
+    -2.0 * s * s
 }
 
 /// E[max(0, n·ω)] under a lobe whose axis has n·p = `c` and sharpness λ: n·ω is treated as

@@ -47,6 +47,39 @@ pub struct TwinParams {
     pub _pad1: u32,
 }
 
+/// What the cut's error bound needs of a tree node (`cut::node_bound`): its box, normal cone,
+/// the box of the light's mirror images and the lit sums. Empty boxes have min > max; a node
+/// without a normal cone has `has_cone` 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuNodeBound {
+    pub bbox_min: [f32; 3],
+    pub has_cone: f32,
+    pub bbox_max: [f32; 3],
+    pub cone_half_angle: f32,
+    pub cone_axis: [f32; 3],
+    pub _pad0: f32,
+    pub image_min: [f32; 3],
+    pub _pad1: f32,
+    pub image_max: [f32; 3],
+    pub _pad2: f32,
+    pub diffuse: [f32; 3],
+    pub _pad3: f32,
+    /// Σ A μ per sharpness bin (`cut::SHARPNESS_BINS`), RGB and a pad each.
+    pub peak_by_sharpness: [[f32; 4]; 6],
+}
+
+/// A receiver point's BRDF lobes (`transport::receiver::ReceiverLobes`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuReceiver {
+    pub normal: [f32; 3],
+    pub stretch: f32,
+    pub diffuse: [f32; 3],
+    pub lobe_count: u32,
+    pub lobes: [GpuSg; 4],
+}
+
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructLayout {
@@ -75,6 +108,28 @@ pub fn layouts() -> Vec<StructLayout> {
             _pad
         }),
         layout!(TwinQuery { a, b, c, d }),
+        layout!(GpuNodeBound {
+            bbox_min,
+            has_cone,
+            bbox_max,
+            cone_half_angle,
+            cone_axis,
+            _pad0,
+            image_min,
+            _pad1,
+            image_max,
+            _pad2,
+            diffuse,
+            _pad3,
+            peak_by_sharpness
+        }),
+        layout!(GpuReceiver {
+            normal,
+            stretch,
+            diffuse,
+            lobe_count,
+            lobes
+        }),
         layout!(TwinParams {
             function,
             count,
@@ -82,4 +137,48 @@ pub fn layouts() -> Vec<StructLayout> {
             _pad1
         }),
     ]
+}
+
+impl GpuReceiver {
+    pub fn new(rx: &crate::transport::receiver::ReceiverLobes) -> GpuReceiver {
+        let mut lobes = [GpuSg::default(); 4];
+        for (slot, l) in lobes.iter_mut().zip(rx.lobes()) {
+            *slot = GpuSg::from(*l);
+        }
+        GpuReceiver {
+            normal: rx.normal.to_array(),
+            stretch: rx.stretch(),
+            diffuse: rx.diffuse.to_array(),
+            lobe_count: rx.lobes().len().min(4) as u32,
+            lobes,
+        }
+    }
+}
+
+impl GpuNodeBound {
+    /// Node `i` of a lit scene.
+    pub fn new(lit: &crate::cut::LitScene, i: u32) -> GpuNodeBound {
+        let n = &lit.tree.nodes[i as usize];
+        let l = &lit.nodes[i as usize];
+        let (has_cone, axis, half) = match n.cone {
+            Some(c) => (1.0, c.axis.to_array(), c.half_angle),
+            None => (0.0, [0.0; 3], 0.0),
+        };
+        let mut peaks = [[0.0; 4]; 6];
+        for (p, v) in peaks.iter_mut().zip(&l.peak_by_sharpness) {
+            *p = [v.x, v.y, v.z, 0.0];
+        }
+        GpuNodeBound {
+            bbox_min: n.bbox_min.to_array(),
+            has_cone,
+            bbox_max: n.bbox_max.to_array(),
+            cone_half_angle: half,
+            cone_axis: axis,
+            image_min: l.image_min.to_array(),
+            image_max: l.image_max.to_array(),
+            diffuse: l.diffuse.to_array(),
+            peak_by_sharpness: peaks,
+            ..GpuNodeBound::default()
+        }
+    }
 }

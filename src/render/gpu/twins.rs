@@ -1,8 +1,10 @@
 //! The WGSL math functions (`shaders/shared/math.wgsl`) next to their Rust twins: [`run`]
 //! evaluates one of them on the GPU over a table of inputs (`shaders/math_twins.wgsl`), [`cpu`]
 //! evaluates the Rust twin of the same name over the same table, and the GPU tests compare them.
+//! The cut's bound, whose inputs are a tree node and a receiver, has its own pair:
+//! [`run_node_bound`] against `cut::node_bound`.
 
-use super::layout::{TwinParams, TwinQuery};
+use super::layout::{GpuNodeBound, GpuReceiver, TwinParams, TwinQuery};
 use super::{Gpu, GpuError, describe};
 use crate::math::sg::{Sg, lobe_integral};
 use glam::{Vec2, Vec3};
@@ -89,6 +91,48 @@ fn failed(reason: impl Into<String>) -> GpuError {
 
 /// The WGSL twin of `twin` over `queries`, on the GPU.
 pub fn run(gpu: &Gpu, twin: Twin, queries: &[TwinQuery]) -> Result<Vec<[f32; 4]>, GpuError> {
+    let node = [GpuNodeBound::default()];
+    let receiver = [GpuReceiver::default()];
+    dispatch(gpu, twin as u32, queries, &node, &receiver)
+}
+
+/// Index of `node_bound` in `shaders/math_twins.wgsl` (it takes a node and a receiver per row,
+/// beyond a [`TwinQuery`]).
+const NODE_BOUND: u32 = 6;
+
+/// The WGSL `node_bound` (twin of `cut::node_bound`) at `points[i]` for `nodes[i]` and
+/// `receivers[i]`, on the GPU; RGB in the first three lanes.
+pub fn run_node_bound(
+    gpu: &Gpu,
+    nodes: &[GpuNodeBound],
+    receivers: &[GpuReceiver],
+    points: &[Vec3],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    if nodes.len() != points.len() || receivers.len() != points.len() {
+        return Err(failed(format!(
+            "inconsistent sizes: {} nodes, {} receivers, {} points",
+            nodes.len(),
+            receivers.len(),
+            points.len()
+        )));
+    }
+    let queries: Vec<TwinQuery> = points
+        .iter()
+        .map(|p| TwinQuery {
+            a: [p.x, p.y, p.z, 0.0],
+            ..TwinQuery::default()
+        })
+        .collect();
+    dispatch(gpu, NODE_BOUND, &queries, nodes, receivers)
+}
+
+fn dispatch(
+    gpu: &Gpu,
+    function: u32,
+    queries: &[TwinQuery],
+    nodes: &[GpuNodeBound],
+    receivers: &[GpuReceiver],
+) -> Result<Vec<[f32; 4]>, GpuError> {
     if queries.is_empty() {
         return Ok(Vec::new());
     }
@@ -126,7 +170,7 @@ pub fn run(gpu: &Gpu, twin: Twin, queries: &[TwinQuery]) -> Result<Vec<[f32; 4]>
         cache: None,
     });
     let params = TwinParams {
-        function: twin as u32,
+        function,
         count: queries.len() as u32,
         _pad0: 0,
         _pad1: 0,
@@ -139,6 +183,16 @@ pub fn run(gpu: &Gpu, twin: Twin, queries: &[TwinQuery]) -> Result<Vec<[f32; 4]>
     let query_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("twin queries"),
         contents: bytemuck::cast_slice(queries),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let node_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("twin nodes"),
+        contents: bytemuck::cast_slice(nodes),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let receiver_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("twin receivers"),
+        contents: bytemuck::cast_slice(receivers),
         usage: wgpu::BufferUsages::STORAGE,
     });
     let out_bytes = (queries.len() * 16) as u64;
@@ -163,6 +217,14 @@ pub fn run(gpu: &Gpu, twin: Twin, queries: &[TwinQuery]) -> Result<Vec<[f32; 4]>
             wgpu::BindGroupEntry {
                 binding: 2,
                 resource: out.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: node_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: receiver_buf.as_entire_binding(),
             },
         ],
     });
