@@ -52,3 +52,23 @@ struct GpuReceiver {
     lobe_count: u32,
     lobes: array<GpuSg, 4>,
 }
+
+// One face of a point light's cube shadow map (`render::gpu::vsm`).
+struct GpuVsmFace {
+    forward: vec3<f32>,
+    margin: f32,
+    right: vec3<f32>,
+    far: f32,
+    up: vec3<f32>,
+    _pad0: f32,
+    light: vec3<f32>,
+    _pad1: f32,
+}
+
+// The shadow-map blur's uniform.
+struct GpuBlurParams {
+    resolution: u32,
+    radius: u32,
+    vertical: u32,
+    _pad: u32,
+}

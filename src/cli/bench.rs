@@ -470,6 +470,92 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
         "\nOn lavapipe the GPU is a software rasteriser on the same cores, so a pass this small \
          is dominated by dispatch and read-back.\n"
     );
+    // The point light's shadow map: rasterised on the GPU against ray-cast on the CPU.
+    let _ = writeln!(
+        md,
+        "Variance shadow maps of the point light (six 512² faces, blur radius 2): \
+         `render::gpu::vsm::ShadowMapper` (rasterised, `shaders/vsm.wgsl` + \
+         `shaders/vsm_blur.wgsl`, read back to the CPU) against its twin \
+         `VarianceShadowMap::build` (a ray per texel through the BVH, all threads), in this \
+         process, best of three.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| scene | triangles | GPU setup (compile, upload; once) | GPU per map | CPU per map | CPU ÷ GPU per map |\n|---|---|---|---|---|---|"
+    );
+    match interreflect::render::gpu::Gpu::new() {
+        Ok(gpu) => {
+            for scene in [
+                "scenes/ring.toml",
+                "scenes/bunny.toml",
+                "scenes/dragon.toml",
+            ] {
+                eprint!("bench: shadow map of {scene} ... ");
+                let sc = interreflect::scene::Scene::load(Path::new(scene))?;
+                let accel = interreflect::accel::Accel::build(&sc.mesh.positions, &sc.mesh.indices);
+                let opts = interreflect::visibility::vsm::VsmOptions {
+                    resolution: 512,
+                    blur: 2,
+                    light_bleeding: 0.2,
+                };
+                let light = sc.lights[0];
+                let best = |f: &mut dyn FnMut()| {
+                    (0..3)
+                        .map(|_| {
+                            let t = Instant::now();
+                            f();
+                            t.elapsed().as_secs_f64()
+                        })
+                        .fold(f64::INFINITY, f64::min)
+                };
+                let mut map = None;
+                let tc = best(&mut || {
+                    map = Some(interreflect::visibility::vsm::VarianceShadowMap::build(
+                        &accel,
+                        sc.mesh.bounds(),
+                        &light,
+                        &opts,
+                    ))
+                });
+                let Some(setup) = map.as_ref().and_then(|m| m.cube_setup()) else {
+                    let _ = writeln!(md, "| {scene} | not a point light | | | | |");
+                    continue;
+                };
+                let t0 = Instant::now();
+                let mapper = interreflect::render::gpu::vsm::ShadowMapper::new(
+                    &gpu,
+                    &sc.mesh.positions,
+                    &sc.mesh.indices,
+                )
+                .map_err(|e| anyhow::anyhow!("shadow map on the GPU: {e}"))?;
+                let t_setup = t0.elapsed().as_secs_f64();
+                let mut err = None;
+                let tg = best(&mut || {
+                    if let Err(e) = mapper.cube_moments(&setup, opts.blur) {
+                        err = Some(e.to_string());
+                    }
+                });
+                if let Some(e) = err {
+                    bail!("shadow map on the GPU: {e}");
+                }
+                eprintln!("CPU ÷ GPU {:.2}", tc / tg);
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {:.0} ms | {:.0} ms | {:.0} ms | {:.2}× |",
+                    sc.name,
+                    sc.mesh.indices.len(),
+                    t_setup * 1e3,
+                    tg * 1e3,
+                    tc * 1e3,
+                    tc / tg
+                );
+            }
+        }
+        Err(e) => {
+            let _ = writeln!(md, "| — | | no GPU adapter: {e} | | | |");
+        }
+    }
+    o_blank(&mut md);
     let _ = writeln!(
         md,
         "The whole suite took {:.0} s. Kernel micro-benchmarks: `cargo bench --bench sg` and \

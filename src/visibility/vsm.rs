@@ -74,6 +74,21 @@ pub struct VarianceShadowMap {
     min_variance: f32,
     /// Face coordinates the texels span ([`margin_scale`]).
     margin: f32,
+    /// Depth of texels that see nothing.
+    far: f32,
+}
+
+/// What a GPU needs to rasterise the same cube map as [`VarianceShadowMap::build`]: the light's
+/// position, each face's (forward, right, up), the face coordinates the texels span, the depth
+/// of empty texels and the resolution. Texel (i, j) of a face looks along
+/// forward + right·u + up·v with u, v = (2 (i, j) + 1)/res − 1, times `margin`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CubeSetup {
+    pub position: Vec3,
+    pub faces: [(Vec3, Vec3, Vec3); 6],
+    pub margin: f32,
+    pub far: f32,
+    pub resolution: u32,
 }
 
 /// The one-sided Chebyshev (Cantelli) bound of the fraction of depths ≥ `t`, from their moments
@@ -211,7 +226,36 @@ impl VarianceShadowMap {
             bleeding: opts.light_bleeding,
             min_variance,
             margin,
+            far,
         }
+    }
+
+    /// (E[z], E[z²]) per texel, face after face, rows of [`Self::resolution`] texels from
+    /// v = −1 up.
+    pub fn moments(&self) -> &[Vec2] {
+        &self.moments
+    }
+
+    pub fn resolution(&self) -> u32 {
+        self.res
+    }
+
+    /// The cube's geometry, for a point light (or a wide spot); `None` for other projections.
+    pub fn cube_setup(&self) -> Option<CubeSetup> {
+        let Projection::Cube { position } = self.projection else {
+            return None;
+        };
+        let mut faces = [(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO); 6];
+        for (out, f) in faces.iter_mut().zip(&self.faces) {
+            *out = (f.forward, f.right, f.up);
+        }
+        Some(CubeSetup {
+            position,
+            faces,
+            margin: self.margin,
+            far: self.far,
+            resolution: self.res,
+        })
     }
 
     /// The lit fraction at `p` in [0, 1] (1 outside the map, where the light's own falloff

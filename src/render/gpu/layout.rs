@@ -80,6 +80,30 @@ pub struct GpuReceiver {
     pub lobes: [GpuSg; 4],
 }
 
+/// One face of a point light's cube shadow map (`super::vsm`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVsmFace {
+    pub forward: [f32; 3],
+    pub margin: f32,
+    pub right: [f32; 3],
+    pub far: f32,
+    pub up: [f32; 3],
+    pub _pad0: f32,
+    pub light: [f32; 3],
+    pub _pad1: f32,
+}
+
+/// The shadow-map blur's uniform.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBlurParams {
+    pub resolution: u32,
+    pub radius: u32,
+    pub vertical: u32,
+    pub _pad: u32,
+}
+
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructLayout {
@@ -122,6 +146,22 @@ pub fn layouts() -> Vec<StructLayout> {
             diffuse,
             _pad3,
             peak_by_sharpness
+        }),
+        layout!(GpuVsmFace {
+            forward,
+            margin,
+            right,
+            far,
+            up,
+            _pad0,
+            light,
+            _pad1
+        }),
+        layout!(GpuBlurParams {
+            resolution,
+            radius,
+            vertical,
+            _pad
         }),
         layout!(GpuReceiver {
             normal,

@@ -12,6 +12,7 @@ pub mod layout;
 pub mod prt;
 pub mod shaders;
 pub mod twins;
+pub mod vsm;
 
 use std::sync::{Arc, Mutex};
 

@@ -15,7 +15,7 @@ pub const SHARED: [(&str, &str); 2] = [
 ];
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 2] = [
+pub const PASSES: [(&str, &str); 4] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -24,6 +24,8 @@ pub const PASSES: [(&str, &str); 2] = [
         "math_twins",
         include_str!("../../../shaders/math_twins.wgsl"),
     ),
+    ("vsm", include_str!("../../../shaders/vsm.wgsl")),
+    ("vsm_blur", include_str!("../../../shaders/vsm_blur.wgsl")),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.
