@@ -23,7 +23,7 @@ for scene in ring bunny dragon; do
   ref="$refs/$scene-reference-s1.exr"
   [ -f "$ref" ] || { echo "missing $ref: run scripts/sg-cpu-results.sh first" >&2; exit 1; }
   echo "== $scene sg approx"
-  "$bin" render "scenes/$scene.toml" --method sg --visibility approx --indirect-only \
+  "$bin" render "scenes/$scene.toml" --method sg --visibility approx --device cpu --indirect-only \
     --width 64 --spp 16 --output "$out/$scene-sg-approx.exr" --quiet
   "$bin" compare "$out/$scene-sg-approx.exr" "$ref" --json \
     --error-map "$out/$scene-sg-approx-error.png" > "$out/$scene-sg-approx-metrics.json" 2>/dev/null
@@ -31,7 +31,7 @@ for scene in ring bunny dragon; do
     for n in $counts; do
       name="$scene-vpl-$vis-$n"
       echo "== $scene vpl $vis, $n VPLs"
-      "$bin" render "scenes/$scene.toml" --method vpl --visibility "$vis" --vpls "$n" \
+      "$bin" render "scenes/$scene.toml" --method vpl --visibility "$vis" --device cpu --vpls "$n" \
         --indirect-only --width 64 --spp 16 --output "$out/$name.exr" --quiet
       "$bin" compare "$out/$name.exr" "$ref" --json --error-map "$out/$name-error.png" \
         > "$out/$name-metrics.json" 2>/dev/null

@@ -152,3 +152,50 @@ fn no_adapter_fails_clearly_or_falls_back_to_the_cpu() {
     assert!(dir.path().join("auto.exr").is_file());
     assert!(dir.path().join("cache-auto").is_dir());
 }
+
+/// The same for sg's shadow maps (the stage of sg with a GPU pass): with no adapter,
+/// `--device gpu` fails before rendering and writes nothing; `--device auto` makes them on the
+/// CPU with one notice and says so in the log.
+#[test]
+fn sg_shadow_maps_without_an_adapter_fail_clearly_or_fall_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bunny.toml");
+    let run = |device: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
+            .args(["render", scene, "--method", "sg", "--visibility", "vsm"])
+            .args(["--device", device, "--width", "16", "--spp", "1", "--quiet"])
+            .arg("--output")
+            .arg(dir.path().join(format!("{device}.exr")))
+            .env("WGPU_BACKEND", "dx12")
+            .env("XDG_RUNTIME_DIR", dir.path())
+            .output()
+            .unwrap()
+    };
+    let gpu = run("gpu");
+    let stderr = String::from_utf8_lossy(&gpu.stderr);
+    assert_eq!(gpu.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("error: --device gpu: the shadow maps need the GPU: no GPU adapter found"),
+        "{stderr}"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+
+    let auto = run("auto");
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert_eq!(auto.status.code(), Some(0), "{stderr}");
+    let notices: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("notice:"))
+        .collect();
+    assert_eq!(notices.len(), 1, "{stderr}");
+    assert!(
+        notices[0].starts_with("notice: shadow maps made on the CPU: no GPU"),
+        "{stderr}"
+    );
+    let log: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("auto.json")).unwrap())
+            .unwrap();
+    let on = log["sg"]["shadow_maps_on"].as_str().unwrap_or_default();
+    assert!(on.starts_with("cpu (no GPU"), "{on}");
+}

@@ -355,6 +355,7 @@ fn sg_two_squares_one_bounce_matches_quadrature() {
             mode,
             max_edge: 0.0,
             visibility: interreflect::render::Visibility::Exact,
+            device: interreflect::render::Device::Cpu,
         };
         let (img, stats) = render_sg_quiet(&scene, &accel, &o);
         assert!(stats.cut_size_mean > 1.0 && stats.cut_size_max <= 1000);
@@ -409,6 +410,7 @@ fn sg_is_bit_identical_for_one_and_two_threads() {
             mode,
             max_edge: 0.2,
             visibility,
+            device: interreflect::render::Device::Cpu,
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -464,6 +466,7 @@ fn sg_with_shadow_maps_is_close_to_shadow_rays() {
             mode: CutMode::Pixel,
             max_edge: scene.mesh.diagonal() / 128.0,
             visibility,
+            device: interreflect::render::Device::Cpu,
         };
         render_sg_quiet(&scene, &accel, &o)
     };

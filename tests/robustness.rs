@@ -329,6 +329,7 @@ fn sg_opts(scene: &Scene, brute: bool, mode: CutMode, visibility: Visibility) ->
         mode,
         max_edge: scene.mesh.diagonal() / 128.0,
         visibility,
+        device: interreflect::render::Device::Cpu,
     }
 }
 
@@ -383,6 +384,7 @@ fn vpl_is_finite() {
                 direct: true,
                 indirect: true,
                 visibility: vis,
+                device: interreflect::render::Device::Cpu,
                 vpl_count: 64,
                 clamp_distance,
             };

@@ -63,6 +63,7 @@ fn vpl(scene: &Scene, accel: &Accel, count: u32, clamp_distance: f32, seed: u64)
         direct: false,
         indirect: true,
         visibility: Visibility::Exact,
+        device: interreflect::render::Device::Cpu,
         vpl_count: count,
         clamp_distance,
     };

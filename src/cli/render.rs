@@ -73,7 +73,8 @@ pub struct RenderArgs {
     /// No progress bar and no log lines (errors and warnings still go to stderr).
     #[arg(long, short)]
     pub quiet: bool,
-    /// Where passes that have a GPU version run (so far: prt's relighting).
+    /// Where passes that have a GPU version run (so far: prt's relighting, and the shadow maps
+    /// of point lights for sg and vpl with --visibility vsm or approx).
     #[arg(long, value_enum, default_value_t = Device::Auto)]
     pub device: Device,
     /// prt: SH order, bands l < order (default: methods.prt.order).
@@ -468,6 +469,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         };
         (img, None, None, Some(prt_log), None, 0)
     } else if args.method == Method::Vpl {
+        shadow_map_device_check(&args)?;
         let opts = VplOptions {
             width,
             height,
@@ -478,6 +480,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             visibility: args.visibility,
             vpl_count,
             clamp_distance,
+            device: args.device,
         };
         let result = progress::run(height as u64, args.quiet, |prog| {
             pool.install(|| render_vpl(&scene, &accel, &opts, prog))
@@ -485,6 +488,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         let Some((img, stats)) = result else {
             return Ok(interrupted());
         };
+        shadow_map_fallback(&args, &stats.shadow_maps_on)?;
         log(format!(
             "vpl: {} VPLs, clamp distance {:.4} ({} of {} pairs clamped), {} visibility rays",
             stats.vpls,
@@ -511,6 +515,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             nonfinite,
         )
     } else if is_sg {
+        shadow_map_device_check(&args)?;
         let opts = SgOptions {
             width,
             height,
@@ -523,6 +528,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             mode: cut_mode,
             max_edge,
             visibility: args.visibility,
+            device: args.device,
         };
         let result = progress::run(sg_work_units(&opts), args.quiet, |prog| {
             pool.install(|| render_sg(&scene, &accel, &opts, prog))
@@ -530,6 +536,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         let Some((img, stats)) = result else {
             return Ok(interrupted());
         };
+        shadow_map_fallback(&args, &stats.shadow_maps_on)?;
         let s = &stats;
         log(format!(
             "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
@@ -742,6 +749,33 @@ fn workload(
             .clamp(1, interreflect::math::sh::MAX_ORDER) as u64,
         prt_gpu: args.device != Device::Cpu,
         lights: lights as u64,
+    }
+}
+
+/// With `--device gpu`, shadow maps made on the GPU need an adapter: fail before rendering.
+fn shadow_map_device_check(args: &RenderArgs) -> anyhow::Result<()> {
+    if args.device == Device::Gpu && args.visibility != Visibility::Exact {
+        interreflect::render::gpu::Gpu::new()
+            .map_err(|e| anyhow::anyhow!("--device gpu: the shadow maps need the GPU: {e}"))?;
+    }
+    Ok(())
+}
+
+/// Where the shadow maps were made ("cpu (why)" when the GPU was asked for and not used): an
+/// error with `--device gpu`, a one-line notice with `--device auto`.
+fn shadow_map_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
+    let Some(why) = on.strip_prefix("cpu (") else {
+        return Ok(());
+    };
+    let why = why.strip_suffix(')').unwrap_or(why);
+    match args.device {
+        Device::Gpu => {
+            anyhow::bail!("--device gpu: the shadow maps could not be made on the GPU: {why}")
+        }
+        _ => {
+            eprintln!("notice: shadow maps made on the CPU: {why}");
+            Ok(())
+        }
     }
 }
 

@@ -78,6 +78,10 @@ pub struct VarianceShadowMap {
     far: f32,
 }
 
+/// A cube rasteriser for [`VarianceShadowMap::build_with`]: the six faces' moments of a setup,
+/// blurred with the given radius, or `None` to fall back to casting rays.
+pub type CubeRaster<'a> = dyn Fn(&CubeSetup, u32) -> Option<Vec<Vec2>> + 'a;
+
 /// What a GPU needs to rasterise the same cube map as [`VarianceShadowMap::build`]: the light's
 /// position, each face's (forward, right, up), the face coordinates the texels span, the depth
 /// of empty texels and the resolution. Texel (i, j) of a face looks along
@@ -143,6 +147,19 @@ fn basis(forward: Vec3) -> Face {
 impl VarianceShadowMap {
     /// Renders the map of `light` over the scene in `accel` (bounding box `bounds`).
     pub fn build(accel: &Accel, bounds: (Vec3, Vec3), light: &Light, opts: &VsmOptions) -> Self {
+        Self::build_with(accel, bounds, light, opts, None)
+    }
+
+    /// [`Self::build`], with a point light's cube rasterised by `raster` when given: it returns
+    /// the six faces' moments, already blurred with `opts.blur` (`render::gpu::vsm`), or `None`
+    /// to fall back to casting rays.
+    pub fn build_with(
+        accel: &Accel,
+        bounds: (Vec3, Vec3),
+        light: &Light,
+        opts: &VsmOptions,
+        raster: Option<&CubeRaster<'_>>,
+    ) -> Self {
         let (lo, hi) = bounds;
         let centre = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(1e-3);
@@ -186,6 +203,33 @@ impl VarianceShadowMap {
         };
         let n = res as usize;
         let margin = margin_scale(res, opts.blur);
+        if let (Projection::Cube { position }, Some(raster)) = (projection, raster) {
+            let mut cube = [(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO); 6];
+            for (out, f) in cube.iter_mut().zip(&faces) {
+                *out = (f.forward, f.right, f.up);
+            }
+            let setup = CubeSetup {
+                position,
+                faces: cube,
+                margin,
+                far,
+                resolution: res,
+            };
+            if let Some(moments) = raster(&setup, opts.blur)
+                && moments.len() == faces.len() * n * n
+            {
+                return VarianceShadowMap {
+                    projection,
+                    faces,
+                    res,
+                    moments,
+                    bleeding: opts.light_bleeding,
+                    min_variance: min_variance(far),
+                    margin,
+                    far,
+                };
+            }
+        }
         let mut moments: Vec<Vec2> = (0..faces.len() * n * n)
             .into_par_iter()
             .map(|k| {

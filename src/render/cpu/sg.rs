@@ -20,7 +20,7 @@ use crate::cut::{
 use crate::image::Image;
 use crate::precompute::tree::{self, ReflectorTree};
 use crate::precompute::vpl::{self, Vpl};
-use crate::render::Visibility;
+use crate::render::{Device, Visibility};
 use crate::scene::{Light, Scene};
 use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use crate::visibility::ism::{ImperfectShadowMaps, nearest_vpl_weights_among};
@@ -61,6 +61,8 @@ pub struct SgOptions {
     pub max_edge: f32,
     /// Light visibility by shadow rays or by variance shadow maps (the scene's `[visibility]`).
     pub visibility: Visibility,
+    /// Where the stages with a GPU pass run (so far: point lights' shadow maps).
+    pub device: Device,
 }
 
 /// Seconds per stage.
@@ -78,8 +80,12 @@ pub struct SgTimes {
 }
 
 /// Statistics of an SG render.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SgStats {
+    /// Where the shadow maps were made ("cpu", "gpu (adapter)", or why the GPU was not used);
+    /// empty without shadow maps.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub shadow_maps_on: String,
     pub reflector_triangles: usize,
     /// Reflector triangles after splitting to `max_edge` (what the tree is built over).
     pub reflector_pieces: usize,
@@ -181,7 +187,8 @@ pub fn render_sg(
 
     // Shadow maps (`--visibility vsm`), one per light.
     let t = Instant::now();
-    let maps = shadow_maps(scene, accel, opts.visibility);
+    let (maps, place) = shadow_maps(scene, accel, opts.visibility, opts.device);
+    stats.shadow_maps_on = place;
     stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
 
     // Light every reflector piece, per light (shadow rays or the shadow map at four points).
@@ -342,20 +349,87 @@ pub fn render_sg(
 /// The light's visibility at surface point `p` in [0, 1]: a shadow ray (offset `eps` towards
 /// the light), or the lit fraction of the light's variance shadow map at the same offset point.
 /// One variance shadow map per light, or none for each with `Visibility::Exact`.
+///
+/// With `device` other than [`Device::Cpu`], a point light's cube is rasterised on the GPU
+/// (`render::gpu::vsm`); the returned string says where the maps were made ("cpu", "gpu (adapter
+/// name)", or "cpu (the GPU failed: …)" when `Device::Auto` fell back).
 pub(super) fn shadow_maps(
     scene: &Scene,
     accel: &Accel,
     visibility: Visibility,
-) -> Vec<Option<VarianceShadowMap>> {
-    scene
+    device: Device,
+) -> (Vec<Option<VarianceShadowMap>>, String) {
+    if visibility == Visibility::Exact {
+        return (scene.lights.iter().map(|_| None).collect(), String::new());
+    }
+    let point_lights = scene
+        .lights
+        .iter()
+        .any(|l| matches!(l, crate::scene::Light::Point { .. }));
+    let mut place = "cpu".to_string();
+    let gpu = if device == Device::Cpu || !point_lights {
+        None
+    } else {
+        match crate::render::gpu::Gpu::new() {
+            Ok(g) => Some(g),
+            Err(e) => {
+                place = format!("cpu (no GPU: {e})");
+                None
+            }
+        }
+    };
+    let mapper = gpu.as_ref().and_then(|g| {
+        match crate::render::gpu::vsm::ShadowMapper::new(
+            g,
+            &scene.mesh.positions,
+            &scene.mesh.indices,
+        ) {
+            Ok(m) => Some(m),
+            Err(e) => {
+                place = format!("cpu (the GPU failed: {e})");
+                None
+            }
+        }
+    });
+    let failure = std::sync::Mutex::new(None::<String>);
+    // (A named signature, so that the closure is general over the setup's lifetime.)
+    fn general<F: Fn(&crate::visibility::vsm::CubeSetup, u32) -> Option<Vec<Vec2>>>(f: F) -> F {
+        f
+    }
+    let raster = general(|setup, blur| {
+        let m = mapper.as_ref()?;
+        match m.cube_moments(setup, blur) {
+            Ok(v) => Some(v),
+            Err(e) => {
+                if let Ok(mut f) = failure.lock() {
+                    *f = Some(e.to_string());
+                }
+                None
+            }
+        }
+    });
+    let maps = scene
         .lights
         .iter()
         .map(|light| {
-            (visibility != Visibility::Exact).then(|| {
-                VarianceShadowMap::build(accel, scene.mesh.bounds(), light, &scene.settings.vsm)
-            })
+            Some(VarianceShadowMap::build_with(
+                accel,
+                scene.mesh.bounds(),
+                light,
+                &scene.settings.vsm,
+                mapper
+                    .is_some()
+                    .then_some(&raster as &crate::visibility::vsm::CubeRaster<'_>),
+            ))
         })
-        .collect()
+        .collect();
+    if let (Some(g), true) = (gpu.as_ref(), mapper.is_some()) {
+        place = match failure.into_inner().ok().flatten() {
+            Some(e) => format!("cpu (the GPU failed: {e})"),
+            None => format!("gpu ({})", g.adapter),
+        };
+    }
+    (maps, place)
 }
 
 /// Direct light of every light reflected at `sp` towards `wo`, the light's visibility by a

@@ -34,6 +34,7 @@ impl Setup {
             mode: CutMode::Pixel,
             max_edge: scene.mesh.diagonal() / 128.0,
             visibility: crate::render::Visibility::Exact,
+            device: crate::render::Device::Cpu,
         };
         let pieces = reflector_pieces(&scene, opts.max_edge);
         let tree = build_tree(&scene, &pieces);

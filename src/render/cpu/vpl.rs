@@ -26,6 +26,7 @@ use crate::brdf::Brdf;
 use crate::image::Image;
 use crate::math::{Frame, triangle_barycentrics};
 use crate::precompute::vpl::{self, Vpl};
+use crate::render::Device;
 use crate::render::Visibility;
 use crate::scene::Scene;
 use crate::visibility::ism::ImperfectShadowMaps;
@@ -50,6 +51,8 @@ pub struct VplOptions {
     pub vpl_count: u32,
     /// The geometry term's distance clamp d_c (scene units; 0 = no clamp).
     pub clamp_distance: f32,
+    /// Where the stages with a GPU pass run (so far: point lights' shadow maps).
+    pub device: Device,
 }
 
 /// Seconds per stage.
@@ -67,6 +70,10 @@ pub struct VplTimes {
 /// What a VPL render did.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct VplStats {
+    /// Where the shadow maps were made ("cpu", "gpu (adapter)", or why the GPU was not used);
+    /// empty without shadow maps.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub shadow_maps_on: String,
     /// VPLs of all lights.
     pub vpls: usize,
     pub clamp_distance: f32,
@@ -116,7 +123,8 @@ pub fn render_vpl(
     let eps = ray_epsilon(scene);
 
     let t = Instant::now();
-    let maps = shadow_maps(scene, accel, opts.visibility);
+    let (maps, place) = shadow_maps(scene, accel, opts.visibility, opts.device);
+    stats.shadow_maps_on = place;
     stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
