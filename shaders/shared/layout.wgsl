@@ -72,3 +72,12 @@ struct GpuBlurParams {
     vertical: u32,
     _pad: u32,
 }
+
+// The tonemap pass's uniform (`render::gpu::tonemap`): 2^exposure, the tone operator (0 clamp,
+// 1 Reinhard, 2 ACES), the pixel count and the invocations per dispatch row.
+struct GpuTonemapParams {
+    scale: f32,
+    tone_operator: u32,
+    count: u32,
+    row_stride: u32,
+}

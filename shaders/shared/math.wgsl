@@ -426,3 +426,35 @@ fn node_bound(n: GpuNodeBound, x: vec3<f32>, rx: GpuReceiver) -> vec3<f32> {
     }
     return radiance * hmax * (1.001 * cos_max / d2);
 }
+
+// ---- Tonemapping (`image::tonemap`).
+
+// The tone curve of operator `op` (0 clamp, 1 Reinhard, 2 ACES) on one exposed linear value
+// (`image::tonemap::ToneOperator::apply`): negative and NaN → 0, +∞ → 1.
+fn tone_operator_apply(op: u32, x: f32) -> f32 {
+    if (x != x || x <= 0.0) {
+        return 0.0;
+    }
+    if (x > 3.4028234e38) {
+        return 1.0;
+    }
+    var y = x;
+    if (op == 1u) {
+        y = x / (1.0 + x);
+    } else if (op == 2u) {
+        y = (2.51 * x + 0.03) / (2.43 * x + 0.59 + 0.14 / x);
+    }
+    return clamp(y, 0.0, 1.0);
+}
+
+// The sRGB OETF on [0, 1] (`image::tonemap::srgb_oetf`, which evaluates it in f64).
+fn srgb_oetf(x_in: f32) -> f32 {
+    var x = 0.0;
+    if (x_in == x_in) {
+        x = clamp(x_in, 0.0, 1.0);
+    }
+    if (x <= 0.0031308) {
+        return 12.92 * x;
+    }
+    return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+}

@@ -104,6 +104,19 @@ pub struct GpuBlurParams {
     pub _pad: u32,
 }
 
+/// The tonemap pass's uniform (`super::tonemap`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTonemapParams {
+    /// 2^exposure.
+    pub scale: f32,
+    /// 0 clamp, 1 Reinhard, 2 ACES.
+    pub tone_operator: u32,
+    pub count: u32,
+    /// Invocations per dispatch row.
+    pub row_stride: u32,
+}
+
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructLayout {
@@ -162,6 +175,12 @@ pub fn layouts() -> Vec<StructLayout> {
             radius,
             vertical,
             _pad
+        }),
+        layout!(GpuTonemapParams {
+            scale,
+            tone_operator,
+            count,
+            row_stride
         }),
         layout!(GpuReceiver {
             normal,

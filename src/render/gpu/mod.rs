@@ -11,6 +11,7 @@
 pub mod layout;
 pub mod prt;
 pub mod shaders;
+pub mod tonemap;
 pub mod twins;
 pub mod vsm;
 

@@ -15,7 +15,7 @@ pub const SHARED: [(&str, &str); 2] = [
 ];
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 4] = [
+pub const PASSES: [(&str, &str); 5] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -26,6 +26,7 @@ pub const PASSES: [(&str, &str); 4] = [
     ),
     ("vsm", include_str!("../../../shaders/vsm.wgsl")),
     ("vsm_blur", include_str!("../../../shaders/vsm_blur.wgsl")),
+    ("tonemap", include_str!("../../../shaders/tonemap.wgsl")),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.
