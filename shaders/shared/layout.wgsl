@@ -81,3 +81,16 @@ struct GpuTonemapParams {
     count: u32,
     row_stride: u32,
 }
+
+// The camera of the G-buffer pass (`scene::Camera`): its frame, tan(fov_y / 2), the aspect
+// ratio and the far distance of the depth range.
+struct GpuCamera {
+    position: vec3<f32>,
+    tan_half: f32,
+    forward: vec3<f32>,
+    aspect: f32,
+    right: vec3<f32>,
+    far: f32,
+    up: vec3<f32>,
+    _pad: f32,
+}

@@ -117,6 +117,20 @@ pub struct GpuTonemapParams {
     pub row_stride: u32,
 }
 
+/// The camera of the G-buffer pass (`super::gbuffer`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCamera {
+    pub position: [f32; 3],
+    pub tan_half: f32,
+    pub forward: [f32; 3],
+    pub aspect: f32,
+    pub right: [f32; 3],
+    pub far: f32,
+    pub up: [f32; 3],
+    pub _pad: f32,
+}
+
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructLayout {
@@ -181,6 +195,16 @@ pub fn layouts() -> Vec<StructLayout> {
             tone_operator,
             count,
             row_stride
+        }),
+        layout!(GpuCamera {
+            position,
+            tan_half,
+            forward,
+            aspect,
+            right,
+            far,
+            up,
+            _pad
         }),
         layout!(GpuReceiver {
             normal,

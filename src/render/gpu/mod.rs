@@ -8,6 +8,7 @@
 //! Passes so far: [`prt::relight`] (`shaders/prt_relight.wgsl`) and [`twins::run`]
 //! (`shaders/math_twins.wgsl`, which runs the WGSL math functions over a table for the tests).
 
+pub mod gbuffer;
 pub mod layout;
 pub mod prt;
 pub mod shaders;

@@ -15,7 +15,7 @@ pub const SHARED: [(&str, &str); 2] = [
 ];
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 5] = [
+pub const PASSES: [(&str, &str); 6] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -27,6 +27,7 @@ pub const PASSES: [(&str, &str); 5] = [
     ("vsm", include_str!("../../../shaders/vsm.wgsl")),
     ("vsm_blur", include_str!("../../../shaders/vsm_blur.wgsl")),
     ("tonemap", include_str!("../../../shaders/tonemap.wgsl")),
+    ("gbuffer", include_str!("../../../shaders/gbuffer.wgsl")),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.
