@@ -44,6 +44,83 @@ pub struct Gpu {
     pub max_binding: u64,
     /// Errors the device reported outside an error scope (validation, out of memory).
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Nanoseconds per timestamp tick, when the device has timestamp queries.
+    timestamp_period: Option<f32>,
+}
+
+/// Timestamp queries around passes: pass `k` writes its start to query 2k and its end to
+/// 2k + 1; [`Timer::resolve`] appends the copy, [`Timer::read`] returns each pass's duration.
+pub(crate) struct Timer {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    readable: wgpu::Buffer,
+    passes: u32,
+    period: f32,
+}
+
+impl Timer {
+    /// A timer for `passes` passes, or `None` when the device has no timestamps.
+    pub(crate) fn new(gpu: &Gpu, passes: u32) -> Option<Timer> {
+        let period = gpu.timestamp_period?;
+        let count = 2 * passes.max(1);
+        let bytes = count as u64 * 8;
+        Some(Timer {
+            set: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count,
+            }),
+            resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readable: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps read"),
+                size: bytes,
+                usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            passes: passes.max(1),
+            period,
+        })
+    }
+
+    pub(crate) fn render_writes(&self, k: u32) -> wgpu::RenderPassTimestampWrites<'_> {
+        wgpu::RenderPassTimestampWrites {
+            query_set: &self.set,
+            beginning_of_pass_write_index: Some(2 * k),
+            end_of_pass_write_index: Some(2 * k + 1),
+        }
+    }
+
+    pub(crate) fn compute_writes(&self, k: u32) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.set,
+            beginning_of_pass_write_index: Some(2 * k),
+            end_of_pass_write_index: Some(2 * k + 1),
+        }
+    }
+
+    pub(crate) fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
+        let n = 2 * self.passes;
+        enc.resolve_query_set(&self.set, 0..n, &self.resolve, 0);
+        enc.copy_buffer_to_buffer(&self.resolve, 0, &self.readable, 0, n as u64 * 8);
+    }
+
+    /// Each pass's duration in seconds (after the work was submitted with [`Self::resolve`]).
+    pub(crate) fn read(&self, gpu: &Gpu) -> Result<Vec<f64>, GpuError> {
+        let bytes = gpu.read_back(&self.readable, 2 * self.passes as u64 * 8, "timestamps")?;
+        let ticks: Vec<u64> = bytes
+            .chunks_exact(8)
+            .map(|b| u64::from_ne_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+            .collect();
+        Ok(ticks
+            .chunks_exact(2)
+            .map(|t| t[1].saturating_sub(t[0]) as f64 * self.period as f64 * 1e-9)
+            .collect())
+    }
 }
 
 impl Gpu {
@@ -62,9 +139,11 @@ impl Gpu {
         let info = adapter.get_info();
         let name = format!("{} ({:?})", info.name, info.backend);
         let limits = adapter.limits();
+        // Timestamps, for per-pass GPU times, where the adapter has them.
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("interreflect"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -87,9 +166,13 @@ impl Gpu {
                 v.push(describe(&e));
             }
         }));
+        let timestamp_period = features
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| queue.get_timestamp_period());
         Ok(Gpu {
             device,
             queue,
+            timestamp_period,
             adapter: name,
             max_binding: limits
                 .max_storage_buffer_binding_size

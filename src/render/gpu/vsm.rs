@@ -145,6 +145,16 @@ impl<'g> ShadowMapper<'g> {
     /// (0: none): face after face, rows from v = −1 up, as
     /// [`crate::visibility::vsm::VarianceShadowMap::moments`].
     pub fn cube_moments(&self, setup: &CubeSetup, blur: u32) -> Result<Vec<Vec2>, GpuError> {
+        Ok(self.cube_moments_timed(setup, blur)?.0)
+    }
+
+    /// [`Self::cube_moments`] and, when the device has timestamp queries, the GPU time of the
+    /// rasterisation (six passes) and of the blur (two passes), in seconds.
+    pub fn cube_moments_timed(
+        &self,
+        setup: &CubeSetup,
+        blur: u32,
+    ) -> Result<(Vec<Vec2>, Option<PassTimes>), GpuError> {
         let gpu = self.gpu;
         let n = setup.resolution;
         if n == 0 || n > 8192 {
@@ -162,6 +172,7 @@ impl<'g> ShadowMapper<'g> {
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let (pipeline, vertices, index_buf) = (&self.pipeline, &self.vertices, &self.index_buf);
+        let timer = super::Timer::new(gpu, 6);
         let extent = wgpu::Extent3d {
             width: n,
             height: n,
@@ -190,10 +201,15 @@ impl<'g> ShadowMapper<'g> {
         let target_view = target.create_view(&Default::default());
         let depth_view = depth.create_view(&Default::default());
         // The faces' moments, padded rows, one face after another.
+        // Dense rows (n a multiple of 32) let the blur run on the copied faces directly, with
+        // one read-back; otherwise the rows are unpadded on the CPU first.
+        let dense = padded_row == row_bytes;
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vsm faces"),
             size: 6 * padded_row * n as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            usage: wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
         let far = setup.far;
@@ -247,7 +263,7 @@ impl<'g> ShadowMapper<'g> {
                         }),
                         stencil_ops: None,
                     }),
-                    timestamp_writes: None,
+                    timestamp_writes: timer.as_ref().map(|t| t.render_writes(k as u32)),
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
@@ -275,12 +291,33 @@ impl<'g> ShadowMapper<'g> {
                 extent,
             );
         }
+        if let Some(t) = &timer {
+            t.resolve(&mut enc);
+        }
         gpu.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(failed(describe(&e)));
         }
+        if dense && blur > 0 {
+            gpu.wait("shadow map")?;
+            gpu.check("shadow map")?;
+            let raster = match &timer {
+                Some(t) => Some(t.read(gpu)?.iter().sum::<f64>()),
+                None => None,
+            };
+            let (moments, blur_time) = self.blur_buffer(&staging, n, blur)?;
+            let times = match (raster, blur_time) {
+                (Some(r), Some(b)) => Some(PassTimes { raster: r, blur: b }),
+                _ => None,
+            };
+            return Ok((moments, times));
+        }
         let bytes = gpu.read_back(&staging, 6 * padded_row * n as u64, "shadow map")?;
         gpu.check("shadow map")?;
+        let raster = match &timer {
+            Some(t) => Some(t.read(gpu)?.iter().sum::<f64>()),
+            None => None,
+        };
         // Unpad the rows. The vertex shader maps v to NDC y = −v / margin, so the framebuffer's
         // row 0 (NDC y = +1) is v = −margin, the CPU's row 0: no flip.
         let mut moments = vec![Vec2::ZERO; 6 * (n * n) as usize];
@@ -303,23 +340,53 @@ impl<'g> ShadowMapper<'g> {
             }
         }
         if blur == 0 {
-            return Ok(moments);
+            return Ok((
+                moments,
+                raster.map(|r| PassTimes {
+                    raster: r,
+                    blur: 0.0,
+                }),
+            ));
         }
-        self.blur_faces(&moments, n, blur)
+        let (moments, blur_time) = self.blur_faces(&moments, n, blur)?;
+        let times = match (raster, blur_time) {
+            (Some(r), Some(b)) => Some(PassTimes { raster: r, blur: b }),
+            _ => None,
+        };
+        Ok((moments, times))
     }
 
     /// The separable blur of six n × n faces on the GPU (two dispatches).
-    fn blur_faces(&self, moments: &[Vec2], n: u32, radius: u32) -> Result<Vec<Vec2>, GpuError> {
+    fn blur_faces(
+        &self,
+        moments: &[Vec2],
+        n: u32,
+        radius: u32,
+    ) -> Result<(Vec<Vec2>, Option<f64>), GpuError> {
+        let a = self
+            .gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("blur a"),
+                contents: bytemuck::cast_slice(moments),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            });
+        self.blur_buffer(&a, n, radius)
+    }
+
+    /// The blur of six dense n × n faces held in `a` (a storage buffer), in place, read back.
+    fn blur_buffer(
+        &self,
+        a: &wgpu::Buffer,
+        n: u32,
+        radius: u32,
+    ) -> Result<(Vec<Vec2>, Option<f64>), GpuError> {
         let gpu = self.gpu;
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = &self.blur_pipeline;
-        let bytes = std::mem::size_of_val(moments) as u64;
-        let a = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("blur a"),
-            contents: bytemuck::cast_slice(moments),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
+        let timer = super::Timer::new(gpu, 2);
+        let bytes = 6 * (n as u64) * (n as u64) * 8;
         let b = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blur b"),
             size: bytes,
@@ -328,7 +395,7 @@ impl<'g> ShadowMapper<'g> {
         });
         let mut enc =
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        for (vertical, src, dst) in [(0u32, &a, &b), (1u32, &b, &a)] {
+        for (vertical, src, dst) in [(0u32, a, &b), (1u32, &b, a)] {
             let params = GpuBlurParams {
                 resolution: n,
                 radius,
@@ -360,19 +427,26 @@ impl<'g> ShadowMapper<'g> {
             });
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("vsm_blur"),
-                timestamp_writes: None,
+                timestamp_writes: timer.as_ref().map(|t| t.compute_writes(vertical)),
             });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(n.div_ceil(8), n.div_ceil(8), 6);
         }
+        if let Some(t) = &timer {
+            t.resolve(&mut enc);
+        }
         gpu.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(failed(describe(&e)));
         }
-        let out = gpu.read_back(&a, bytes, "shadow-map blur")?;
+        let out = gpu.read_back(a, bytes, "shadow-map blur")?;
         gpu.check("shadow-map blur")?;
-        Ok(out
+        let blur_time = match &timer {
+            Some(t) => Some(t.read(gpu)?.iter().sum::<f64>()),
+            None => None,
+        };
+        let moments = out
             .chunks_exact(8)
             .map(|c| {
                 Vec2::new(
@@ -380,6 +454,16 @@ impl<'g> ShadowMapper<'g> {
                     f32::from_ne_bytes([c[4], c[5], c[6], c[7]]),
                 )
             })
-            .collect())
+            .collect();
+        Ok((moments, blur_time))
     }
+}
+
+/// GPU time of the shadow-map passes from timestamp queries, in seconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PassTimes {
+    /// The six faces' rasterisation.
+    pub raster: f64,
+    /// The two blur dispatches (0 without a blur).
+    pub blur: f64,
 }
