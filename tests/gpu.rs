@@ -1,21 +1,12 @@
 //! GPU passes against their CPU twins, on whatever adapter wgpu finds (lavapipe on machines
 //! without a GPU). With `CI=true` a missing adapter fails these tests instead of skipping them.
 
+mod common;
+
 use glam::Vec3;
 use interreflect::math::Rng;
 use interreflect::precompute::prt::relight_cpu;
-use interreflect::render::gpu::{Gpu, adapter_required, prt::relight};
-
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
-        Err(e) => {
-            eprintln!("skipped (no GPU adapter): {e}");
-            None
-        }
-    }
-}
+use interreflect::render::gpu::prt::relight;
 
 fn random_table(vertices: usize, coefficients: usize, seed: u64) -> (Vec<Vec3>, Vec<Vec3>) {
     let mut rng = Rng::keyed(seed, 0, 0);
@@ -47,7 +38,7 @@ fn assert_close(gpu: &[Vec3], cpu: &[Vec3], transfer: &[Vec3], lighting: &[Vec3]
 
 #[test]
 fn prt_relight_matches_its_cpu_twin() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = common::gpu() else { return };
     for (order, vertices) in [(1usize, 7usize), (3, 1000), (8, 5003)] {
         let n = order * order;
         let (transfer, lighting) = random_table(vertices, n, order as u64);
@@ -59,7 +50,7 @@ fn prt_relight_matches_its_cpu_twin() {
 
 #[test]
 fn prt_relight_splits_work_over_the_binding_limit() {
-    let Some(mut g) = gpu() else { return };
+    let Some(mut g) = common::gpu() else { return };
     // 1000 vertices per chunk: 4321 vertices take 5 dispatches, the last one partial.
     g.max_binding = 1000 * 64 * 12;
     let (transfer, lighting) = random_table(4321, 64, 9);
@@ -74,7 +65,7 @@ fn prt_relight_splits_work_over_the_binding_limit() {
 
 #[test]
 fn prt_relight_rejects_inconsistent_sizes() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = common::gpu() else { return };
     let (transfer, lighting) = random_table(10, 9, 1);
     let err = relight(&g, &transfer[..85], 9, &lighting).unwrap_err();
     assert!(err.to_string().contains("inconsistent sizes"), "{err}");
@@ -82,7 +73,7 @@ fn prt_relight_rejects_inconsistent_sizes() {
 
 #[test]
 fn a_binding_over_the_device_limit_is_an_error_not_a_panic() {
-    let Some(mut g) = gpu() else { return };
+    let Some(mut g) = common::gpu() else { return };
     let limit = g.max_binding;
     if limit > 512 << 20 {
         eprintln!(

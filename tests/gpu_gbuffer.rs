@@ -4,25 +4,15 @@
 //! two break the tie differently), with the same distance and barycentrics to rounding.
 //! lavapipe in CI; `CI=true` makes a missing adapter fail.
 
+mod common;
+
 use interreflect::accel::Accel;
 use interreflect::render::gpu::gbuffer::gbuffer;
-use interreflect::render::gpu::{Gpu, adapter_required};
 use interreflect::scene::Scene;
-
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            None
-        }
-    }
-}
 
 #[test]
 fn rasterised_g_buffer_matches_the_primary_rays() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     for name in ["ring", "bunny", "dragon"] {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));

@@ -2,21 +2,11 @@
 //! every operator and several exposures, over an image with every kind of value: dark and
 //! bright, negative, NaN and infinite. lavapipe in CI; `CI=true` makes a missing adapter fail.
 
+mod common;
+
 use glam::Vec3;
 use interreflect::image::{Image, ToneOperator, Tonemap, to_srgb8};
 use interreflect::math::sampling::Rng;
-use interreflect::render::gpu::{Gpu, adapter_required};
-
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            None
-        }
-    }
-}
 
 /// 96 × 64: a log-uniform ramp over 12 decades, random channels, and special values.
 fn image() -> Image {
@@ -42,7 +32,7 @@ fn image() -> Image {
 
 #[test]
 fn gpu_tonemapping_matches_its_rust_twin() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let img = image();
     for op in ToneOperator::ALL {
         for exposure in [-4.0, 0.0, 2.5] {

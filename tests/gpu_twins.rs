@@ -2,23 +2,13 @@
 //! (lavapipe in CI; `CI=true` makes a missing adapter a failure, otherwise the test skips with a
 //! note).
 
+mod common;
+
 use interreflect::math::sampling::Rng;
 use interreflect::math::sg::lobe_integral;
 use interreflect::math::spherical_triangle::benchmark_inputs;
 use interreflect::render::gpu::layout::TwinQuery;
 use interreflect::render::gpu::twins::{Twin, cpu, run};
-use interreflect::render::gpu::{Gpu, adapter_required};
-
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            None
-        }
-    }
-}
 
 fn unit(rng: &mut Rng) -> [f32; 3] {
     loop {
@@ -195,7 +185,7 @@ fn tolerance(t: Twin, q: &TwinQuery) -> (f32, f32) {
 
 #[test]
 fn every_wgsl_math_function_matches_its_rust_twin() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     for t in Twin::ALL {
         let rows = table(t);
         let g = run(&gpu, t, &rows).unwrap_or_else(|e| panic!("{}: {e}", t.wgsl_name()));
@@ -243,7 +233,7 @@ fn every_wgsl_math_function_matches_its_rust_twin() {
 /// The comparison is not vacuous: a twin evaluated on the wrong function differs.
 #[test]
 fn a_wrong_function_is_detected() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let rows = table(Twin::ClampedCosineMean);
     let g = run(&gpu, Twin::LobeIntegral, &rows).unwrap();
     let differs = rows
@@ -265,7 +255,7 @@ fn node_bound_matches_its_rust_twin() {
     use interreflect::scene::Scene;
     use interreflect::transport::receiver::{ReceiverLobes, ReceiverOptions};
 
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
     let scene = Scene::load(&path).unwrap();
     let pieces = interreflect::cut::reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);

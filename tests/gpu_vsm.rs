@@ -4,22 +4,12 @@
 //! on a silhouette edge (the two break the tie differently). lavapipe in CI; `CI=true` makes a
 //! missing adapter a failure.
 
+mod common;
+
 use interreflect::accel::Accel;
 use interreflect::render::gpu::vsm::cube_moments;
-use interreflect::render::gpu::{Gpu, adapter_required};
 use interreflect::scene::Scene;
 use interreflect::visibility::vsm::{VarianceShadowMap, VsmOptions};
-
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) if adapter_required() => panic!("CI=true requires a GPU adapter: {e}"),
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            None
-        }
-    }
-}
 
 /// (share of texels whose depth differs by more than 1e-4 relative, largest relative
 /// difference of the mean depth E[z] over the whole map).
@@ -39,7 +29,7 @@ fn compare(cpu: &[glam::Vec2], gpu: &[glam::Vec2]) -> (f64, f64) {
 
 #[test]
 fn rasterised_shadow_maps_match_the_ray_cast_ones() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     for name in ["ring", "bunny"] {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
@@ -85,7 +75,7 @@ fn rasterised_shadow_maps_match_the_ray_cast_ones() {
 /// The comparison is not vacuous: a light moved by 10 % of the scene changes most texels.
 #[test]
 fn a_moved_light_is_detected() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ring.toml");
     let scene = Scene::load(&path).unwrap();
     let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
@@ -132,7 +122,7 @@ fn sg_images_with_gpu_shadow_maps_match_the_cpu_ones() {
     use interreflect::render::{Device, Visibility};
     use std::sync::atomic::AtomicBool;
 
-    let Some(_gpu) = gpu() else { return };
+    let Some(_gpu) = common::gpu() else { return };
     let cancel = AtomicBool::new(false);
     let progress = Progress {
         done: &no_progress,

@@ -13,7 +13,6 @@ use serde_json::Value;
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -41,26 +40,7 @@ struct Rendered {
 
 fn render(exe: &Path, work: &Path, name: &str, args: &[&str]) -> anyhow::Result<Rendered> {
     let exr = work.join(format!("{name}.exr"));
-    let status = Command::new(exe)
-        .arg("render")
-        .args(args)
-        .arg("--output")
-        .arg(&exr)
-        .arg("--quiet")
-        .status()
-        .with_context(|| format!("cannot run {}", exe.display()))?;
-    if !status.success() {
-        if status.code() == Some(130) {
-            bail!("interrupted");
-        }
-        bail!("`render {}` failed ({status})", args.join(" "));
-    }
-    let json = exr.with_extension("json");
-    let log = serde_json::from_str(
-        &std::fs::read_to_string(&json)
-            .with_context(|| format!("cannot read {}", json.display()))?,
-    )
-    .with_context(|| format!("{}: not a render log", json.display()))?;
+    let log = super::child::render(exe, args, &exr, true)?;
     Ok(Rendered { log, exr })
 }
 
@@ -305,7 +285,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
             100.0 * m.rel_rmse
         );
     }
-    o_blank(&mut md);
+    md.push('\n');
 
     // 3. The kernel against the machine's exp.
     eprintln!("bench: integrate_sg and exp throughput");
@@ -393,7 +373,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
         eprintln!("{:.2} M paths/s", p / 1e6);
         let _ = writeln!(md, "| {stem} | {:.2} M | {:.2} M |", p / 1e6, ry / 1e6);
     }
-    o_blank(&mut md);
+    md.push('\n');
 
     // 5. GPU against its CPU twin: PRT relighting, the one pass on the GPU so far.
     let _ = writeln!(md, "## GPU against its CPU twin\n");
@@ -599,7 +579,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
             b8 * 1e3
         );
     }
-    o_blank(&mut md);
+    md.push('\n');
     let _ = writeln!(
         md,
         "The whole suite took {:.0} s. Kernel micro-benchmarks: `cargo bench --bench sg` and \
@@ -615,8 +595,4 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
         t_all.elapsed().as_secs_f64()
     );
     Ok(0)
-}
-
-fn o_blank(md: &mut String) {
-    md.push('\n');
 }

@@ -9,6 +9,7 @@ macro_rules! outln {
 }
 
 mod bench;
+mod child;
 mod compare;
 mod envmap;
 mod fit;

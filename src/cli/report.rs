@@ -16,7 +16,6 @@ use interreflect::report::{
 use interreflect::scene::Scene;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
 
 /// The scenes reported when none is named: the three evaluation scenes, then the others.
@@ -220,45 +219,30 @@ fn render(
     output: &Path,
     quiet: bool,
 ) -> anyhow::Result<Rendered> {
-    let mut cmd = Command::new(exe);
-    cmd.arg("render")
-        .arg(&scene.path)
-        .args(["--method", method])
-        .args(["--width", &size.0.to_string()])
-        .args(["--height", &size.1.to_string()])
-        .args(["--threads", &threads.to_string()])
-        .arg("--output")
-        .arg(output);
+    let mut args: Vec<std::ffi::OsString> = vec![scene.path.clone().into()];
+    for a in [
+        "--method",
+        method,
+        "--width",
+        &size.0.to_string(),
+        "--height",
+        &size.1.to_string(),
+        "--threads",
+        &threads.to_string(),
+    ] {
+        args.push(a.into());
+    }
     if !extra.iter().any(|a| a == "--spp") {
-        cmd.args(["--spp", &spp.to_string()]);
+        args.extend(["--spp".into(), spp.to_string().into()]);
     }
-    cmd.args(extra);
+    args.extend(extra.iter().map(Into::into));
     if indirect {
-        cmd.arg("--indirect-only");
+        args.push("--indirect-only".into());
     }
-    if quiet {
-        cmd.arg("--quiet");
-    }
-    let status = cmd
-        .status()
-        .with_context(|| format!("cannot run {}", exe.display()))?;
-    if !status.success() {
-        if status.code() == Some(130) {
-            bail!("interrupted");
-        }
-        bail!(
-            "{}: `render --method {method} {}` failed ({status}); the report stops here",
-            scene.path.display(),
-            extra.join(" ")
-        );
-    }
+    let log = super::child::render(exe, &args, output, quiet)
+        .with_context(|| format!("{}: the report stops here", scene.path.display()))?;
     let image = read_exr(output)?;
     let json = output.with_extension("json");
-    let log: Value = serde_json::from_str(
-        &std::fs::read_to_string(&json)
-            .with_context(|| format!("cannot read {}", json.display()))?,
-    )
-    .with_context(|| format!("{}: not a render log", json.display()))?;
     let seconds = log["seconds"]["render"]
         .as_f64()
         .with_context(|| format!("{}: no seconds.render", json.display()))?;
@@ -426,7 +410,7 @@ fn report_scene(
                 .to_string(),
         ));
     }
-    let mut images: Vec<(Family, Option<u32>, bool, Image)> = Vec::new();
+    let mut images: Vec<(Family, Option<u32>, Image)> = Vec::new();
     let mut i = 0;
     while i < specs.len() {
         let spec = specs[i].clone();
@@ -497,7 +481,7 @@ fn report_scene(
                 ));
             }
         }
-        images.push((spec.family, spec.param, spec.default, r.image));
+        images.push((spec.family, spec.param, r.image));
     }
 
     let mut report = SceneReport {
@@ -525,9 +509,9 @@ fn report_scene(
         let Some(shown) = report.shown_run(f) else {
             continue;
         };
-        let Some((_, _, _, img)) = images
+        let Some((_, _, img)) = images
             .iter()
-            .find(|(fam, p, _, _)| *fam == f && *p == shown.param)
+            .find(|(fam, p, _)| *fam == f && *p == shown.param)
         else {
             continue;
         };

@@ -245,51 +245,35 @@ pub fn plan(s: &Settings, d: Defaults) -> Vec<RunSpec> {
         if !s.families.contains(&f) {
             continue;
         }
-        match f {
-            Family::Sg => {
-                for c in sweep(&s.sg_caps, Some(d.max_cut)) {
-                    out.push(RunSpec {
-                        family: f,
-                        param: Some(c),
-                        default: c == d.max_cut,
-                        args: vec!["--max-cut".into(), c.to_string()],
-                    });
-                }
+        let (values, default): (&[u32], Option<u32>) = match f {
+            Family::Sg => (&s.sg_caps, Some(d.max_cut)),
+            Family::Vpl => (&s.vpl_counts, Some(d.vpls)),
+            Family::PathTracing => (&s.path_tracing_spp, None),
+            _ => {
+                out.push(RunSpec {
+                    family: f,
+                    param: None,
+                    default: true,
+                    // prt: the transfer is computed, not read from a cache, so its time is
+                    // part of prt's.
+                    args: vec!["--no-cache".into()],
+                });
+                continue;
             }
-            Family::Vpl => {
-                for n in sweep(&s.vpl_counts, Some(d.vpls)) {
-                    out.push(RunSpec {
-                        family: f,
-                        param: Some(n),
-                        default: n == d.vpls,
-                        args: vec!["--vpls".into(), n.to_string()],
-                    });
-                }
+        };
+        let (_, flag) = f.parameter().expect("a swept family has a parameter");
+        for v in sweep(values, default) {
+            let mut args = vec![flag.to_string(), v.to_string()];
+            if f == Family::PathTracing {
+                // A different seed from the reference's: independent noise.
+                args.extend(["--seed".into(), (s.reference_seed + 1).to_string()]);
             }
-            Family::PathTracing => {
-                for n in sweep(&s.path_tracing_spp, None) {
-                    out.push(RunSpec {
-                        family: f,
-                        param: Some(n),
-                        default: false,
-                        // A different seed from the reference's: independent noise.
-                        args: vec![
-                            "--spp".into(),
-                            n.to_string(),
-                            "--seed".into(),
-                            (s.reference_seed + 1).to_string(),
-                        ],
-                    });
-                }
-            }
-            Family::Prt => out.push(RunSpec {
+            out.push(RunSpec {
                 family: f,
-                param: None,
-                default: true,
-                // The transfer is computed, not read from a cache: its time is part of prt's.
-                args: vec!["--no-cache".into()],
-            }),
-            Family::SgBrute => {}
+                param: Some(v),
+                default: Some(v) == default,
+                args,
+            });
         }
     }
     out

@@ -202,38 +202,35 @@ impl VarianceShadowMap {
             Projection::Ortho { .. } => 5.0 * radius,
         };
         let n = res as usize;
-        let margin = margin_scale(res, opts.blur);
-        if let (Projection::Cube { position }, Some(raster)) = (projection, raster) {
-            let mut cube = [(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO); 6];
-            for (out, f) in cube.iter_mut().zip(&faces) {
-                *out = (f.forward, f.right, f.up);
-            }
-            let setup = CubeSetup {
-                position,
-                faces: cube,
-                margin,
-                far,
-                resolution: res,
-            };
-            if let Some(moments) = raster(&setup, opts.blur)
-                && moments.len() == faces.len() * n * n
-            {
-                return VarianceShadowMap {
-                    projection,
-                    faces,
-                    res,
-                    moments,
-                    bleeding: opts.light_bleeding,
-                    min_variance: min_variance(far),
-                    margin,
-                    far,
-                };
-            }
-        }
-        let mut moments: Vec<Vec2> = (0..faces.len() * n * n)
+        let mut map = VarianceShadowMap {
+            projection,
+            faces,
+            res,
+            moments: Vec::new(),
+            bleeding: opts.light_bleeding,
+            min_variance: min_variance(far),
+            margin: margin_scale(res, opts.blur),
+            far,
+        };
+        let rasterised = raster
+            .zip(map.cube_setup())
+            .and_then(|(raster, setup)| raster(&setup, opts.blur))
+            .filter(|m| m.len() == map.faces.len() * n * n);
+        map.moments = match rasterised {
+            Some(m) => m,
+            None => map.ray_cast(accel, opts.blur),
+        };
+        map
+    }
+
+    /// The moments by a ray per texel centre through the BVH, blurred with `blur` texels.
+    fn ray_cast(&self, accel: &Accel, blur: u32) -> Vec<Vec2> {
+        let (res, margin, far, projection) = (self.res, self.margin, self.far, self.projection);
+        let n = res as usize;
+        let mut moments: Vec<Vec2> = (0..self.faces.len() * n * n)
             .into_par_iter()
             .map(|k| {
-                let face = &faces[k / (n * n)];
+                let face = &self.faces[k / (n * n)];
                 let (j, i) = ((k % (n * n)) / n, k % n);
                 let u = (2.0 * (i as f32 + 0.5) / res as f32 - 1.0) * margin;
                 let v = (2.0 * (j as f32 + 0.5) / res as f32 - 1.0) * margin;
@@ -256,22 +253,12 @@ impl VarianceShadowMap {
                 Vec2::new(z, z * z)
             })
             .collect();
-        if opts.blur > 0 {
+        if blur > 0 {
             for face in moments.chunks_mut(n * n) {
-                blur(face, n, opts.blur);
+                self::blur(face, n, blur);
             }
         }
-        let min_variance = min_variance(far);
-        VarianceShadowMap {
-            projection,
-            faces,
-            res,
-            moments,
-            bleeding: opts.light_bleeding,
-            min_variance,
-            margin,
-            far,
-        }
+        moments
     }
 
     /// (E[z], E[z²]) per texel, face after face, rows of [`Self::resolution`] texels from

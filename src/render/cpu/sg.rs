@@ -391,23 +391,11 @@ pub(super) fn shadow_maps(
             }
         }
     });
-    let failure = std::sync::Mutex::new(None::<String>);
-    // (A named signature, so that the closure is general over the setup's lifetime.)
-    fn general<F: Fn(&crate::visibility::vsm::CubeSetup, u32) -> Option<Vec<Vec2>>>(f: F) -> F {
-        f
-    }
-    let raster = general(|setup, blur| {
-        let m = mapper.as_ref()?;
-        match m.cube_moments(setup, blur) {
-            Ok(v) => Some(v),
-            Err(e) => {
-                if let Ok(mut f) = failure.lock() {
-                    *f = Some(e.to_string());
-                }
-                None
-            }
-        }
-    });
+    let failure = std::cell::Cell::new(None::<String>);
+    let raster = |setup: &crate::visibility::vsm::CubeSetup, blur: u32| {
+        let moments = mapper.as_ref()?.cube_moments(setup, blur);
+        moments.map_err(|e| failure.set(Some(e.to_string()))).ok()
+    };
     let maps = scene
         .lights
         .iter()
@@ -424,7 +412,7 @@ pub(super) fn shadow_maps(
         })
         .collect();
     if let (Some(g), true) = (gpu.as_ref(), mapper.is_some()) {
-        place = match failure.into_inner().ok().flatten() {
+        place = match failure.into_inner() {
             Some(e) => format!("cpu (the GPU failed: {e})"),
             None => format!("gpu ({})", g.adapter),
         };

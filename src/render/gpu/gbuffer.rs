@@ -45,53 +45,7 @@ pub fn gbuffer(
     }
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("gbuffer.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(
-            super::shaders::source("gbuffer")
-                .expect("a known pass")
-                .into(),
-        ),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("gbuffer"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("gbuffer_vertex"),
-            compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: 12,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-            })],
-        },
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("gbuffer"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format: wgpu::TextureFormat::Rgba32Uint,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+    let pipeline = gpu.raster_pipeline("gbuffer", wgpu::TextureFormat::Rgba32Uint);
     let cam = GpuCamera {
         position: camera.position.to_array(),
         tan_half: (0.5 * camera.fov_y).tan(),
@@ -107,14 +61,7 @@ pub fn gbuffer(
         contents: bytemuck::bytes_of(&cam),
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }],
-    });
+    let bind = gpu.bind_buffers(&pipeline.get_bind_group_layout(0), &[&uniform]);
     let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("triangle corners"),
         contents: bytemuck::cast_slice(&corners),
@@ -125,25 +72,15 @@ pub fn gbuffer(
         height: h,
         depth_or_array_layers: 1,
     };
-    let texture = |label, format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: extent,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
-    let target = texture(
+    let target = gpu.texture_2d(
         "gbuffer",
+        (w, h),
         wgpu::TextureFormat::Rgba32Uint,
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
-    let depth = texture(
+    let depth = gpu.texture_2d(
         "gbuffer depth",
+        (w, h),
         wgpu::TextureFormat::Depth32Float,
         wgpu::TextureUsages::RENDER_ATTACHMENT,
     );

@@ -109,6 +109,11 @@ impl Timer {
         enc.copy_buffer_to_buffer(&self.resolve, 0, &self.readable, 0, n as u64 * 8);
     }
 
+    /// The summed duration of the passes in seconds (see [`Self::read`]).
+    pub(crate) fn read_total(&self, gpu: &Gpu) -> Result<f64, GpuError> {
+        Ok(self.read(gpu)?.iter().sum())
+    }
+
     /// Each pass's duration in seconds (after the work was submitted with [`Self::resolve`]).
     pub(crate) fn read(&self, gpu: &Gpu) -> Result<Vec<f64>, GpuError> {
         let bytes = gpu.read_back(&self.readable, 2 * self.passes as u64 * 8, "timestamps")?;
@@ -181,6 +186,124 @@ impl Gpu {
         })
     }
 
+    /// The assembled shader of `pass` (`shaders::source`), compiled.
+    fn shader(&self, pass: &str) -> wgpu::ShaderModule {
+        self.device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(pass),
+                source: wgpu::ShaderSource::Wgsl(
+                    shaders::source(pass).expect("a known pass").into(),
+                ),
+            })
+    }
+
+    /// The compute pipeline of `pass`, whose entry point has the pass's name.
+    fn compute_pipeline(&self, pass: &str) -> wgpu::ComputePipeline {
+        let module = self.shader(pass);
+        self.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(pass),
+                layout: None,
+                module: &module,
+                entry_point: Some(pass),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    }
+
+    /// The render pipeline of `pass` that rasterises triangle lists of `vec3<f32>` positions
+    /// (both faces), keeps the nearest fragment (32-bit depth, less) and writes one `format`
+    /// target: the vertex entry is `<pass>_vertex`, the fragment entry `<pass>`.
+    fn raster_pipeline(&self, pass: &str, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
+        let module = self.shader(pass);
+        let vertex_entry = format!("{pass}_vertex");
+        self.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(pass),
+                layout: None,
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(&vertex_entry),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: 12,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(pass),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    }
+
+    /// A 2-D texture of `width` × `height` texels, one mip level, one sample.
+    fn texture_2d(
+        &self,
+        label: &str,
+        (width, height): (u32, u32),
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    }
+
+    /// A bind group of `layout` with `buffers[i]` at binding i.
+    fn bind_buffers(
+        &self,
+        layout: &wgpu::BindGroupLayout,
+        buffers: &[&wgpu::Buffer],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout,
+            entries: &entries,
+        })
+    }
+
     /// Fails with the first error the device reported outside an error scope, if any.
     fn check(&self, what: &str) -> Result<(), GpuError> {
         let first = self
@@ -245,6 +368,28 @@ impl Gpu {
         staging.unmap();
         Ok(data)
     }
+}
+
+/// Workgroups of 64 in x per dispatch row; more items go to further rows in y.
+const ROW_WORKGROUPS: u32 = 1024;
+
+/// The dispatch grid (x, y) of workgroups of 64 for `count` items, at most [`ROW_WORKGROUPS`]
+/// per row: item i is at `gid.y * x * 64 + gid.x`.
+fn dispatch_grid(count: u32) -> (u32, u32) {
+    let groups = count.div_ceil(64);
+    if groups <= ROW_WORKGROUPS {
+        (groups, 1)
+    } else {
+        (ROW_WORKGROUPS, groups.div_ceil(ROW_WORKGROUPS))
+    }
+}
+
+/// Native-endian f32s of read-back bytes (the bytes need not be aligned for f32).
+fn f32s(bytes: &[u8]) -> Vec<f32> {
+    bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
 }
 
 /// The useful part of a wgpu error: its description (its `Display` says only "Validation

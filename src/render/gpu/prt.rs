@@ -5,12 +5,9 @@
 //! storage-binding limit) and then relights for any lighting by uploading only the order² SH
 //! coefficients — what an interactive viewer does every frame.
 
-use super::{Gpu, GpuError, describe};
+use super::{Gpu, GpuError, describe, dispatch_grid, f32s};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
-
-/// Vertices per dispatch row (workgroups of 64 in x; the rest in y).
-const ROW_WORKGROUPS: u32 = 1024;
 
 fn failed(reason: impl Into<String>) -> GpuError {
     GpuError::Failed {
@@ -53,22 +50,7 @@ impl<'g> Relighter<'g> {
         let per_chunk = (gpu.max_binding / bytes_per_vertex).clamp(1, 1 << 22) as usize;
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("prt_relight.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                super::shaders::source("prt_relight")
-                    .expect("a known pass")
-                    .into(),
-            ),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("prt_relight"),
-            layout: None,
-            module: &module,
-            entry_point: Some("prt_relight"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = gpu.compute_pipeline("prt_relight");
         let lighting = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SH lighting"),
             size: (coefficients * 12) as u64,
@@ -91,40 +73,14 @@ impl<'g> Relighter<'g> {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            let groups = (count as u32).div_ceil(64);
-            let (gx, gy) = if groups <= ROW_WORKGROUPS {
-                (groups, 1)
-            } else {
-                (ROW_WORKGROUPS, groups.div_ceil(ROW_WORKGROUPS))
-            };
+            let (gx, gy) = dispatch_grid(count as u32);
             let params: [u32; 4] = [count as u32, coefficients as u32, gx * 64, 0];
             let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("params"),
                 contents: bytemuck::cast_slice(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: params_buf.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: transfer_buf.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: lighting.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: out.as_entire_binding(),
-                    },
-                ],
-            });
+            let bind = gpu.bind_buffers(&layout, &[&params_buf, &transfer_buf, &lighting, &out]);
             chunks.push(Chunk {
                 vertices: count as u32,
                 groups: (gx, gy),
@@ -180,8 +136,7 @@ impl<'g> Relighter<'g> {
         let mut out = Vec::new();
         for c in &self.chunks {
             let bytes = gpu.read_back(&c.out, c.vertices as u64 * 12, "PRT relighting")?;
-            let floats: &[f32] = bytemuck::cast_slice(&bytes);
-            out.extend(floats.chunks_exact(3).map(|v| Vec3::new(v[0], v[1], v[2])));
+            out.extend(f32s(&bytes).chunks_exact(3).map(Vec3::from_slice));
         }
         gpu.check("PRT relighting")?;
         Ok(out)

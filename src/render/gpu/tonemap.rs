@@ -2,12 +2,9 @@
 //! and tone operator of a [`Tonemap`]. Rust twin: [`crate::image::to_srgb8`].
 
 use super::layout::GpuTonemapParams;
-use super::{Gpu, GpuError, describe};
+use super::{Gpu, GpuError, describe, dispatch_grid};
 use crate::image::{Image, ToneOperator, Tonemap};
 use wgpu::util::DeviceExt;
-
-/// Pixels per dispatch row (workgroups of 64 in x; the rest in y).
-const ROW_WORKGROUPS: u32 = 1024;
 
 fn failed(reason: impl Into<String>) -> GpuError {
     GpuError::Failed {
@@ -28,12 +25,7 @@ pub fn to_srgb8(gpu: &Gpu, img: &Image, tm: &Tonemap) -> Result<Vec<[u8; 3]>, Gp
             gpu.max_binding
         )));
     }
-    let groups = (count as u32).div_ceil(64);
-    let (gx, gy) = if groups <= ROW_WORKGROUPS {
-        (groups, 1)
-    } else {
-        (ROW_WORKGROUPS, groups.div_ceil(ROW_WORKGROUPS))
-    };
+    let (gx, gy) = dispatch_grid(count as u32);
     let params = GpuTonemapParams {
         scale: tm.exposure.exp2(),
         tone_operator: match tm.operator {
@@ -46,22 +38,7 @@ pub fn to_srgb8(gpu: &Gpu, img: &Image, tm: &Tonemap) -> Result<Vec<[u8; 3]>, Gp
     };
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("tonemap.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(
-            super::shaders::source("tonemap")
-                .expect("a known pass")
-                .into(),
-        ),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("tonemap"),
-        layout: None,
-        module: &module,
-        entry_point: Some("tonemap"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = gpu.compute_pipeline("tonemap");
     let linear: Vec<f32> = img.data.iter().flat_map(|v| v.to_array()).collect();
     let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("tonemap params"),
@@ -80,24 +57,10 @@ pub fn to_srgb8(gpu: &Gpu, img: &Image, tm: &Tonemap) -> Result<Vec<[u8; 3]>, Gp
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: out.as_entire_binding(),
-            },
-        ],
-    });
+    let bind = gpu.bind_buffers(
+        &pipeline.get_bind_group_layout(0),
+        &[&uniform, &input, &out],
+    );
     let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
     {
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -5,7 +5,7 @@
 //! [`run_node_bound`] against `cut::node_bound`.
 
 use super::layout::{GpuNodeBound, GpuReceiver, TwinParams, TwinQuery};
-use super::{Gpu, GpuError, describe};
+use super::{Gpu, GpuError, describe, f32s};
 use crate::math::sg::{Sg, lobe_integral};
 use glam::{Vec2, Vec3};
 use wgpu::util::DeviceExt;
@@ -153,22 +153,7 @@ fn dispatch(
     }
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("math_twins.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(
-            super::shaders::source("math_twins")
-                .expect("a known pass")
-                .into(),
-        ),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("math_twins"),
-        layout: None,
-        module: &module,
-        entry_point: Some("math_twins"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = gpu.compute_pipeline("math_twins");
     let params = TwinParams {
         function,
         count: queries.len() as u32,
@@ -202,32 +187,10 @@ fn dispatch(
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: query_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: out.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: node_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: receiver_buf.as_entire_binding(),
-            },
-        ],
-    });
+    let bind = gpu.bind_buffers(
+        &pipeline.get_bind_group_layout(0),
+        &[&params_buf, &query_buf, &out, &node_buf, &receiver_buf],
+    );
     let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
     {
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -244,12 +207,7 @@ fn dispatch(
     }
     let data = gpu.read_back(&out, out_bytes, "math twins")?;
     gpu.check("math twins")?;
-    // Byte-wise: the read-back Vec<u8> need not be aligned for f32.
-    let floats: Vec<f32> = data
-        .chunks_exact(4)
-        .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
-    Ok(floats
+    Ok(f32s(&data)
         .chunks_exact(4)
         .map(|v| [v[0], v[1], v[2], v[3]])
         .collect())

@@ -5,7 +5,7 @@
 //! centre; [`cube_moments`] returns the same texel layout, so the two compare texel by texel.
 
 use super::layout::{GpuBlurParams, GpuVsmFace};
-use super::{Gpu, GpuError, describe};
+use super::{Gpu, GpuError, describe, f32s};
 use crate::visibility::vsm::CubeSetup;
 use glam::{Vec2, Vec3};
 use wgpu::util::DeviceExt;
@@ -58,52 +58,7 @@ impl<'g> ShadowMapper<'g> {
         }
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let source = |pass: &str| {
-            wgpu::ShaderSource::Wgsl(super::shaders::source(pass).expect("a known pass").into())
-        };
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("vsm.wgsl"),
-            source: source("vsm"),
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("vsm"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vsm_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 12,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("vsm"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::Rg32Float,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = gpu.raster_pipeline("vsm", wgpu::TextureFormat::Rg32Float);
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("vsm positions"),
             contents: bytemuck::cast_slice(positions),
@@ -114,18 +69,7 @@ impl<'g> ShadowMapper<'g> {
             contents: bytemuck::cast_slice(indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let blur_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("vsm_blur.wgsl"),
-            source: source("vsm_blur"),
-        });
-        let blur_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("vsm_blur"),
-            layout: None,
-            module: &blur_module,
-            entry_point: Some("vsm_blur"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let blur_pipeline = gpu.compute_pipeline("vsm_blur");
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(failed(describe(&e)));
         }
@@ -178,26 +122,18 @@ impl<'g> ShadowMapper<'g> {
             height: n,
             depth_or_array_layers: 1,
         };
-        let target = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("vsm moments"),
-            size: extent,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rg32Float,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("vsm depth"),
-            size: extent,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Depth32Float,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
+        let target = gpu.texture_2d(
+            "vsm moments",
+            (n, n),
+            wgpu::TextureFormat::Rg32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let depth = gpu.texture_2d(
+            "vsm depth",
+            (n, n),
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
         let target_view = target.create_view(&Default::default());
         let depth_view = depth.create_view(&Default::default());
         // The faces' moments, padded rows, one face after another.
@@ -230,14 +166,7 @@ impl<'g> ShadowMapper<'g> {
                 contents: bytemuck::bytes_of(&face),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                }],
-            });
+            let bind = gpu.bind_buffers(&pipeline.get_bind_group_layout(0), &[&uniform]);
             {
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("vsm face"),
@@ -298,61 +227,39 @@ impl<'g> ShadowMapper<'g> {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(failed(describe(&e)));
         }
-        if dense && blur > 0 {
+        let raster_time = |gpu: &Gpu| timer.as_ref().map(|t| t.read_total(gpu)).transpose();
+        let (raster, (moments, blur_time)) = if dense && blur > 0 {
             gpu.wait("shadow map")?;
             gpu.check("shadow map")?;
-            let raster = match &timer {
-                Some(t) => Some(t.read(gpu)?.iter().sum::<f64>()),
-                None => None,
-            };
-            let (moments, blur_time) = self.blur_buffer(&staging, n, blur)?;
-            let times = match (raster, blur_time) {
-                (Some(r), Some(b)) => Some(PassTimes { raster: r, blur: b }),
-                _ => None,
-            };
-            return Ok((moments, times));
-        }
-        let bytes = gpu.read_back(&staging, 6 * padded_row * n as u64, "shadow map")?;
-        gpu.check("shadow map")?;
-        let raster = match &timer {
-            Some(t) => Some(t.read(gpu)?.iter().sum::<f64>()),
-            None => None,
-        };
-        // Unpad the rows. The vertex shader maps v to NDC y = −v / margin, so the framebuffer's
-        // row 0 (NDC y = +1) is v = −margin, the CPU's row 0: no flip.
-        let mut moments = vec![Vec2::ZERO; 6 * (n * n) as usize];
-        for face in 0..6usize {
-            for row in 0..n as usize {
-                let src = (face as u64 * padded_row * n as u64 + row as u64 * padded_row) as usize;
-                let dst = face * (n * n) as usize + row * n as usize;
-                for i in 0..n as usize {
-                    let o = src + i * 8;
-                    let z =
-                        f32::from_ne_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
-                    let z2 = f32::from_ne_bytes([
-                        bytes[o + 4],
-                        bytes[o + 5],
-                        bytes[o + 6],
-                        bytes[o + 7],
-                    ]);
-                    moments[dst + i] = Vec2::new(z, z2);
+            (raster_time(gpu)?, self.blur_buffer(&staging, n, blur)?)
+        } else {
+            let bytes = gpu.read_back(&staging, 6 * padded_row * n as u64, "shadow map")?;
+            gpu.check("shadow map")?;
+            // Unpad the rows. The vertex shader maps v to NDC y = −v / margin, so the
+            // framebuffer's row 0 (NDC y = +1) is v = −margin, the CPU's row 0: no flip.
+            let floats = f32s(&bytes);
+            let row_floats = (padded_row / 4) as usize;
+            let n = n as usize;
+            let mut moments = vec![Vec2::ZERO; 6 * n * n];
+            for face in 0..6 {
+                for row in 0..n {
+                    let src = (face * n + row) * row_floats;
+                    let dst = (face * n + row) * n;
+                    for i in 0..n {
+                        moments[dst + i] = Vec2::new(floats[src + 2 * i], floats[src + 2 * i + 1]);
+                    }
                 }
             }
-        }
-        if blur == 0 {
-            return Ok((
-                moments,
-                raster.map(|r| PassTimes {
-                    raster: r,
-                    blur: 0.0,
-                }),
-            ));
-        }
-        let (moments, blur_time) = self.blur_faces(&moments, n, blur)?;
-        let times = match (raster, blur_time) {
-            (Some(r), Some(b)) => Some(PassTimes { raster: r, blur: b }),
-            _ => None,
+            let blurred = if blur == 0 {
+                (moments, Some(0.0))
+            } else {
+                self.blur_faces(&moments, n as u32, blur)?
+            };
+            (raster_time(gpu)?, blurred)
         };
+        let times = raster
+            .zip(blur_time)
+            .map(|(raster, blur)| PassTimes { raster, blur });
         Ok((moments, times))
     }
 
@@ -407,24 +314,7 @@ impl<'g> ShadowMapper<'g> {
                 contents: bytemuck::bytes_of(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniform.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: src.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: dst.as_entire_binding(),
-                    },
-                ],
-            });
+            let bind = gpu.bind_buffers(&pipeline.get_bind_group_layout(0), &[&uniform, src, dst]);
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("vsm_blur"),
                 timestamp_writes: timer.as_ref().map(|t| t.compute_writes(vertical)),
@@ -442,19 +332,8 @@ impl<'g> ShadowMapper<'g> {
         }
         let out = gpu.read_back(a, bytes, "shadow-map blur")?;
         gpu.check("shadow-map blur")?;
-        let blur_time = match &timer {
-            Some(t) => Some(t.read(gpu)?.iter().sum::<f64>()),
-            None => None,
-        };
-        let moments = out
-            .chunks_exact(8)
-            .map(|c| {
-                Vec2::new(
-                    f32::from_ne_bytes([c[0], c[1], c[2], c[3]]),
-                    f32::from_ne_bytes([c[4], c[5], c[6], c[7]]),
-                )
-            })
-            .collect();
+        let blur_time = timer.as_ref().map(|t| t.read_total(gpu)).transpose()?;
+        let moments = f32s(&out).chunks_exact(2).map(Vec2::from_slice).collect();
         Ok((moments, blur_time))
     }
 }
