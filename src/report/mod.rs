@@ -633,23 +633,9 @@ impl SceneReport {
             o,
             "Each method at its default setting (path tracing: the run nearest sg's time).\n"
         );
-        let _ = writeln!(
-            o,
-            "| method | setting | rel_rmse | relMSE | SSIM | FLIP | time | peak memory |\n|---|---|---|---|---|---|---|---|"
-        );
+        let _ = writeln!(o, "{METRIC_HEADER}");
         for (f, r) in &shown {
-            let _ = writeln!(
-                o,
-                "| {} | {} | {} | {:.2e} | {:.3} | {:.3} | {} | {} |",
-                f.name(),
-                run_setting(r),
-                pct(r.rel_rmse),
-                r.relmse,
-                r.ssim,
-                r.flip,
-                secs(r.seconds),
-                mib(r.peak_bytes)
-            );
+            let _ = writeln!(o, "{}", metric_row(f.name(), r));
         }
         o.push('\n');
 
@@ -726,28 +712,34 @@ impl SceneReport {
         let _ = writeln!(o, "## Error against time\n");
         let _ = writeln!(o, "<img src=\"error-vs-time.png\" width=\"640\">\n");
         let _ = writeln!(o, "## Every run\n");
-        let _ = writeln!(
-            o,
-            "| method | setting | rel_rmse | relMSE | SSIM | FLIP | time | peak memory |\n|---|---|---|---|---|---|---|---|"
-        );
+        let _ = writeln!(o, "{METRIC_HEADER}");
         for r in &self.runs {
-            let _ = writeln!(
-                o,
-                "| {}{} | {} | {} | {:.2e} | {:.3} | {:.3} | {} | {} |",
+            let method = format!(
+                "{}{}",
                 r.family.name(),
-                if r.default { " (default)" } else { "" },
-                run_setting(r),
-                pct(r.rel_rmse),
-                r.relmse,
-                r.ssim,
-                r.flip,
-                secs(r.seconds),
-                mib(r.peak_bytes)
+                if r.default { " (default)" } else { "" }
             );
+            let _ = writeln!(o, "{}", metric_row(&method, r));
         }
         o
     }
 }
+
+/// A row of the metric tables (after [`METRIC_HEADER`]).
+fn metric_row(method: &str, r: &Run) -> String {
+    format!(
+        "| {method} | {} | {} | {:.2e} | {:.3} | {:.3} | {} | {} |",
+        run_setting(r),
+        pct(r.rel_rmse),
+        r.relmse,
+        r.ssim,
+        r.flip,
+        secs(r.seconds),
+        mib(r.peak_bytes)
+    )
+}
+
+const METRIC_HEADER: &str = "| method | setting | rel_rmse | relMSE | SSIM | FLIP | time | peak memory |\n|---|---|---|---|---|---|---|---|";
 
 fn run_setting(r: &Run) -> String {
     match (r.family, r.param) {
