@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The VPL baseline against the SG method at equal time, and writes results/visibility/vpl/
 # (numbers in results/visibility/vpl/numbers.md; the discussion is in results/visibility.md):
-# - sg with the paper's visibility (--visibility approx: variance shadow maps and VPLs with
-#   imperfect shadow maps) on ring, bunny and dragon, indirect light, 64 px wide, 16 spp;
+# - sg with its approximate visibility (--visibility approx: variance shadow maps and the
+#   visibility maps at tree nodes) on ring, bunny and dragon, indirect light, 64 px wide, 16 spp;
 # - vpl with the same visibility (VPL + ISM, the classic renderer) and with shadow rays, at
 #   200, 800, 3200 and 12800 VPLs, same size and samples;
 # - everything against the 4096-spp path-traced references of results/sg-cpu/ (rendered by
@@ -11,6 +11,8 @@
 # Renders run one after another, so sg and vpl share the machine's conditions.
 #
 #   scripts/vpl-results.sh     (about 15 min on 2 cores)
+#   SG_ONLY=1 scripts/vpl-results.sh   (re-renders sg only and rebuilds the tables from the vpl
+#                                       runs' committed logs and metrics; about 4 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=results/visibility/vpl
@@ -27,6 +29,7 @@ for scene in ring bunny dragon; do
     --width 64 --spp 16 --output "$out/$scene-sg-approx.exr" --quiet
   "$bin" compare "$out/$scene-sg-approx.exr" "$ref" --json \
     --error-map "$out/$scene-sg-approx-error.png" > "$out/$scene-sg-approx-metrics.json" 2>/dev/null
+  [ -n "${SG_ONLY:-}" ] && continue
   for vis in approx exact; do
     for n in $counts; do
       name="$scene-vpl-$vis-$n"
@@ -54,7 +57,8 @@ for scene in ["ring", "bunny", "dragon"]:
     def row(label, n, log, m):
         lines.append(f"| {scene} | {label} | {n} | {log['seconds']['render']:.1f} | {m['rel_rmse']*100:.1f} % | "
                      f"{m['relmse']:.3g} | {m['flip']:.3f} |")
-    row("sg approx", 200, sg, sgm)
+    maps = sg["sg"].get("node_maps", 0)
+    row("sg approx", f"— ({maps} node maps)" if maps else 200, sg, sgm)
     cells = [f"{t_sg:.1f} s, {sgm['relmse']:.3g}"]
     for vis in ["approx", "exact"]:
         best = None

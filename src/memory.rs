@@ -218,6 +218,15 @@ pub struct Workload {
     pub prt_gpu: bool,
     /// Light sources whose reflector lighting sg computes (point, spot, directional).
     pub lights: u64,
+    /// sg `--visibility approx`: bytes of one light's visibility maps at tree nodes
+    /// ([`node_map_bytes`]; 0 otherwise).
+    pub node_map_bytes: u64,
+}
+
+/// Bytes of one light's visibility maps at tree nodes: at most `node_maps` maps of
+/// `resolution`² texels of two f32 moments.
+pub fn node_map_bytes(node_maps: u32, resolution: u32) -> u64 {
+    node_maps as u64 * (resolution as u64).pow(2) * 8
 }
 
 /// An estimate of peak memory: named parts in bytes.
@@ -281,6 +290,9 @@ pub fn estimate(w: &Workload) -> Estimate {
             }
             if w.visibility != Visibility::Exact {
                 parts.push(("shadow maps", costs::SHADOW_MAPS));
+            }
+            if w.visibility == Visibility::Approx && w.node_map_bytes > 0 {
+                parts.push(("node visibility maps", w.node_map_bytes * w.lights.max(1)));
             }
         }
         Method::Vpl => {
@@ -396,6 +408,7 @@ mod tests {
             prt_order: 8,
             prt_gpu: false,
             lights: 1,
+            node_map_bytes: node_map_bytes(8000, 32),
         }
     }
 
@@ -433,6 +446,13 @@ mod tests {
             if method == Method::Sg {
                 assert!(more(&|w| w.vertex_cut_nodes = Some(1000)) > base);
                 assert!(more(&|w| w.visibility = Visibility::Approx) > base);
+                let approx = more(&|w| w.visibility = Visibility::Approx);
+                assert!(
+                    more(&|w| {
+                        w.visibility = Visibility::Approx;
+                        w.node_map_bytes *= 4;
+                    }) > approx
+                );
             }
         }
     }

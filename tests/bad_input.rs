@@ -747,7 +747,7 @@ fn environment_maps() {
 
 #[test]
 fn method_settings() {
-    let tables: [(&str, &str, &str); 40] = [
+    let tables: [(&str, &str, &str); 41] = [
         (
             "vpl_clamp_distance_negative",
             "methods.vpl",
@@ -796,6 +796,11 @@ fn method_settings() {
         ("vis_ism_points_zero", "visibility", "ism_points = 0"),
         ("vis_ism_bias_negative", "visibility", "ism_bias = -1"),
         ("vis_ism_bias_infinite", "visibility", "ism_bias = inf"),
+        (
+            "vis_node_maps_too_many",
+            "visibility",
+            "node_maps = 1000000",
+        ),
         ("sg_threshold_negative", "methods.sg", "threshold = -0.5"),
         ("sg_threshold_nan", "methods.sg", "threshold = nan"),
         ("sg_max_cut_too_large", "methods.sg", "max_cut = 100000000"),
@@ -958,7 +963,7 @@ fn output_paths() {
 
 #[test]
 fn command_line_arguments() {
-    let cases: [(&str, &[&str]); 35] = [
+    let cases: [(&str, &[&str]); 36] = [
         ("cli_unknown_flag", &["--frobnicate"]),
         ("cli_unknown_flag_close_to_a_known_one", &["--thread", "2"]),
         ("cli_flag_without_value", &["--spp"]),
@@ -1041,6 +1046,17 @@ fn command_line_arguments() {
         ),
         ("cli_memory_budget_zero", &["--memory-budget", "0"]),
         ("cli_vpls_zero", &["--method", "vpl", "--vpls", "0"]),
+        (
+            "cli_node_maps_too_many",
+            &[
+                "--method",
+                "sg",
+                "--visibility",
+                "approx",
+                "--node-maps",
+                "200000",
+            ],
+        ),
         (
             "cli_vpl_clamp_distance_negative",
             &["--method", "vpl", "--clamp-distance", "-1"],

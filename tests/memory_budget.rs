@@ -143,6 +143,7 @@ fn polygons_beyond_the_header_count_are_caught_after_loading() {
         prt_order: 8,
         prt_gpu: true,
         lights: 1,
+        node_map_bytes: 0,
     };
     // The plane adds 2 triangles and 4 vertices to both.
     let before = memory::estimate(&workload(quads + 2, verts + 4)).total();

@@ -14,7 +14,9 @@ use interreflect::render::cpu::sg::{CutMode, SgOptions, SgStats, render_sg, sg_w
 use interreflect::render::cpu::vpl::{VplOptions, VplStats, render_vpl};
 use interreflect::render::cpu::{RenderOptions, render};
 use interreflect::render::{Device, Method, Visibility};
-use interreflect::scene::{MAX_IMAGE_SIDE, MAX_SPP, MAX_VPLS, RenderSettings, Scene, ScenePreview};
+use interreflect::scene::{
+    MAX_IMAGE_SIDE, MAX_NODE_MAPS, MAX_SPP, MAX_VPLS, RenderSettings, Scene, ScenePreview,
+};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -28,8 +30,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Method::Reference)]
     pub method: Method,
     /// Visibility for sg / sg-brute (exact: shadow rays through the BVH; vsm: variance shadow
-    /// maps for the light; approx: those and VPLs with imperfect shadow maps between reflectors
-    /// and receivers; settings in the scene's [visibility]).
+    /// maps for the light; approx: those and visibility maps at the reflector tree's nodes
+    /// between reflectors and receivers; settings in the scene's [visibility]).
     #[arg(long, value_enum, default_value_t = Visibility::Exact)]
     pub visibility: Visibility,
     /// Where sg selects cuts (default: the scene's methods.sg.cut).
@@ -103,9 +105,14 @@ pub struct RenderArgs {
     /// prt: neither read nor write the transfer cache.
     #[arg(long)]
     pub no_cache: bool,
-    /// VPLs per light for vpl and for sg's approximate visibility (default: visibility.vpl_count).
+    /// VPLs per light for vpl, and for sg's approximate visibility with visibility.node_maps = 0
+    /// (default: visibility.vpl_count).
     #[arg(long, allow_negative_numbers = true)]
     pub vpls: Option<u32>,
+    /// sg --visibility approx: the most visibility maps per light at the tree's nodes, 0 = the
+    /// paper's 3 nearest VPLs instead (default: visibility.node_maps).
+    #[arg(long, allow_negative_numbers = true)]
+    pub node_maps: Option<u32>,
     /// vpl: clamp the geometry term at this distance, 0 = no clamp
     /// (default: methods.vpl.clamp_distance, or 1/50 of the scene's diagonal).
     #[arg(long, allow_negative_numbers = true)]
@@ -406,8 +413,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     if !(clamp_distance.is_finite() && clamp_distance >= 0.0) {
         bail!("--clamp-distance must be a length ≥ 0 (0 = no clamp), got {clamp_distance}");
     }
+    let node_maps = args.node_maps.unwrap_or(scene.settings.ism.node_maps);
+    if node_maps > MAX_NODE_MAPS {
+        bail!("--node-maps must be between 0 and {MAX_NODE_MAPS}, got {node_maps}");
+    }
     let mut scene = scene;
     scene.settings.vpl_count = vpl_count;
+    scene.settings.ism.node_maps = node_maps;
     times.load = t0.elapsed().as_secs_f64();
 
     let pool = {
@@ -557,6 +569,18 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             s.seconds.vertex_cuts,
             s.seconds.shading
         ));
+        if args.visibility == Visibility::Approx {
+            log(format!(
+                "sg visibility: shadow maps {:.2} s; {} {:.2} s",
+                s.seconds.shadow_maps,
+                if s.node_maps > 0 {
+                    format!("{} visibility maps at tree nodes", s.node_maps)
+                } else {
+                    "VPLs with imperfect shadow maps".to_string()
+                },
+                s.seconds.vpls
+            ));
+        }
         let nonfinite = stats.nonfinite_samples;
         (
             img,
@@ -749,6 +773,12 @@ fn workload(
             .clamp(1, interreflect::math::sh::MAX_ORDER) as u64,
         prt_gpu: args.device != Device::Cpu,
         lights: lights as u64,
+        node_map_bytes: interreflect::memory::node_map_bytes(
+            args.node_maps
+                .unwrap_or(settings.ism.node_maps)
+                .min(MAX_NODE_MAPS),
+            settings.ism.resolution,
+        ),
     }
 }
 

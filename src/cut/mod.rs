@@ -904,4 +904,4 @@ impl LitScene<'_> {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

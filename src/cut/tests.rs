@@ -38,15 +38,15 @@ fn materials() -> [Brdf; 4] {
 
 /// A random reflector configuration: `n` triangles in a blob of size `spread` around the
 /// origin (or a bumpy sheet), lit by a point light, as a tree with its lit sums.
-struct Config {
-    tris: Vec<LitTriangle>,
-    tree: ReflectorTree,
-    light: Vec3,
+pub(crate) struct Config {
+    pub(crate) tris: Vec<LitTriangle>,
+    pub(crate) tree: ReflectorTree,
+    pub(crate) light: Vec3,
 }
 
 /// The tree and lit triangles of `tris` (corners and material index) under a point light of
 /// intensity 10 at `light`, fully visible.
-fn lit_config(tris: &[([Vec3; 3], usize)], light: Vec3) -> Config {
+pub(crate) fn lit_config(tris: &[([Vec3; 3], usize)], light: Vec3) -> Config {
     let mats = materials();
     let l = crate::scene::Light::Point {
         position: light,
@@ -105,7 +105,7 @@ fn config(seed: u64, n: usize, sheet: bool) -> Config {
 }
 
 /// A flat 2 × 2 m grid of 2 k² triangles at y = 0 with a mix of materials, lit from above.
-fn grid(k: usize) -> Config {
+pub(crate) fn grid(k: usize) -> Config {
     let p = |i: usize, j: usize| {
         Vec3::new(
             2.0 * i as f32 / k as f32 - 1.0,

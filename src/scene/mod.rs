@@ -60,6 +60,9 @@ pub const MAX_CUT: u32 = 1 << 24;
 
 /// Most VPLs per light (`[visibility] vpl_count`, `render --vpls`).
 pub const MAX_VPLS: u32 = 100_000;
+/// Most visibility maps at tree nodes per light (`[visibility] node_maps`): 100,000 maps of 32²
+/// texels are 0.8 GB, which the memory budget then weighs.
+pub const MAX_NODE_MAPS: u32 = 100_000;
 
 /// Why a scene could not be loaded. Every message names the file and, where it applies, the field.
 #[derive(thiserror::Error, Debug)]
@@ -718,6 +721,7 @@ impl Builder {
             ("visibility.vpl_count", v.vpl_count, 1, MAX_VPLS),
             ("visibility.ism_resolution", v.ism_resolution, 4, 1024),
             ("visibility.ism_points", v.ism_points, 1, 10_000_000),
+            ("visibility.node_maps", v.node_maps, 0, MAX_NODE_MAPS),
         ] {
             if !(lo..=hi).contains(&value) {
                 return Err(self.err(field, format!("must be between {lo} and {hi}, got {value}")));
@@ -748,6 +752,7 @@ impl Builder {
                 points_per_map: v.ism_points,
                 bias: v.ism_bias,
                 blur: true,
+                node_maps: v.node_maps,
             },
             prt: p,
             vpl: vp,

@@ -73,6 +73,14 @@ pub struct VisibilitySpec {
     /// Depth bias of the imperfect shadow maps, a fraction of the distance.
     #[serde(default = "default_ism_bias")]
     pub ism_bias: f32,
+    /// sg `--visibility approx`: tree nodes that get a visibility map of their own (0: the
+    /// paper's proxy, each node interpolating its 3 nearest VPLs' imperfect shadow maps).
+    #[serde(default = "default_node_maps")]
+    pub node_maps: u32,
+}
+
+fn default_node_maps() -> u32 {
+    crate::visibility::ism::IsmOptions::default().node_maps
 }
 
 fn default_vpl_count() -> u32 {
@@ -113,6 +121,7 @@ impl Default for VisibilitySpec {
             ism_resolution: default_ism_resolution(),
             ism_points: default_ism_points(),
             ism_bias: default_ism_bias(),
+            node_maps: default_node_maps(),
         }
     }
 }

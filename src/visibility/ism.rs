@@ -20,9 +20,11 @@
 //!
 //! A receiver point below the VPL's horizon is not lit by it (0).
 
+use crate::accel::Accel;
 use crate::math::sampling::{Distribution1D, uniform_triangle};
 use crate::math::{Frame, Rng};
 use crate::precompute::vpl::Vpl;
+use crate::visibility::node_maps::MapOrigin;
 use crate::visibility::vsm::{bilinear_moments, chebyshev_upper_bound, min_variance};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -39,6 +41,9 @@ pub struct IsmOptions {
     pub bias: f32,
     /// A 3 × 3 blur of the moments after pull-push.
     pub blur: bool,
+    /// sg `--visibility approx`: the tree nodes that get a ray-cast visibility map of their own
+    /// (`render::cpu::sg`, `docs/visibility.md`); 0 for the paper's proxy (3 nearest VPLs).
+    pub node_maps: u32,
 }
 
 impl Default for IsmOptions {
@@ -48,6 +53,7 @@ impl Default for IsmOptions {
             points_per_map: 4096,
             bias: 0.02,
             blur: true,
+            node_maps: 8000,
         }
     }
 }
@@ -135,6 +141,59 @@ impl ImperfectShadowMaps {
         }
     }
 
+    /// Maps of the same layout made exactly, by one ray per texel centre through the BVH
+    /// (nearest hit, or `far` for a miss), for the visibility maps at tree nodes
+    /// (`visibility::node_maps`). Texels beyond the hemisphere's disc take the ray of the
+    /// nearest point on its rim, so that bilinear lookups near the horizon read real depths.
+    pub fn ray_cast(
+        accel: &Accel,
+        origins: &[MapOrigin],
+        resolution: u32,
+        bias: f32,
+        far: f32,
+    ) -> ImperfectShadowMaps {
+        let res = resolution.max(2) as usize;
+        let origins: Vec<(Vec3, Frame)> = origins
+            .iter()
+            .map(|o| (o.position, Frame::from_normal(o.normal)))
+            .collect();
+        let maps: Vec<(Vec<Vec2>, f32)> = origins
+            .par_iter()
+            .map(|&(y, frame)| {
+                let mut nearest_far = 0.0f32;
+                let map = (0..res * res)
+                    .map(|k| {
+                        let (j, i) = (k / res, k % res);
+                        let mut u = 2.0 * (i as f32 + 0.5) / res as f32 - 1.0;
+                        let mut v = 2.0 * (j as f32 + 0.5) / res as f32 - 1.0;
+                        let r2 = u * u + v * v;
+                        if r2 > RIM * RIM {
+                            let s = RIM / r2.sqrt();
+                            (u, v) = (u * s, v * s);
+                        }
+                        let r2 = u * u + v * v;
+                        let d = Vec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
+                        let z = accel
+                            .intersect(y, frame.to_world(d), 0.0, far)
+                            .map_or(far, |h| {
+                                nearest_far = nearest_far.max(h.t);
+                                h.t
+                            });
+                        Vec2::new(z, z * z)
+                    })
+                    .collect();
+                (map, min_variance(nearest_far.max(1e-3)))
+            })
+            .collect();
+        ImperfectShadowMaps {
+            res,
+            origins,
+            min_variance: maps.iter().map(|m| m.1).collect(),
+            atlas: maps.into_iter().flat_map(|m| m.0).collect(),
+            bias,
+        }
+    }
+
     /// Number of maps.
     pub fn len(&self) -> usize {
         self.origins.len()
@@ -148,19 +207,31 @@ impl ImperfectShadowMaps {
     /// the Chebyshev bound of the bilinearly interpolated moments at p's direction for p's
     /// distance (less the bias); 1 where no point reached the map.
     pub fn visibility(&self, i: usize, p: Vec3) -> f32 {
+        self.visibility_above_horizon(i, p).unwrap_or(0.0)
+    }
+
+    /// [`Self::visibility`], or `None` when `p` is below the map's horizon (where it knows
+    /// nothing).
+    pub fn visibility_above_horizon(&self, i: usize, p: Vec3) -> Option<f32> {
         let (y, frame) = &self.origins[i];
-        let Some((u, w, t)) = paraboloid(*y, frame, p) else {
-            return 0.0;
-        };
+        let (u, w, t) = paraboloid(*y, frame, p)?;
         let n = self.res;
         let m = bilinear_moments(&self.atlas[i * n * n..(i + 1) * n * n], n, u, w);
         if !(m.x > 0.0) {
             // No point reached this part of the map: nothing occludes.
-            return 1.0;
+            return Some(1.0);
         }
-        chebyshev_upper_bound(m, t * (1.0 - self.bias), self.min_variance[i])
+        Some(chebyshev_upper_bound(
+            m,
+            t * (1.0 - self.bias),
+            self.min_variance[i],
+        ))
     }
 }
+
+/// Radius in the paraboloid's disc of the outermost ray a ray-cast map casts: 1° above the
+/// horizon.
+const RIM: f32 = 0.983;
 
 /// Depth range of the layer a texel keeps, relative to its nearest point: a floor seen at a
 /// grazing angle from just above spans ±25 % of its distance within one 32² texel, an occluder

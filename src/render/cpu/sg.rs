@@ -24,6 +24,7 @@ use crate::render::{Device, Visibility};
 use crate::scene::{Light, Scene};
 use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use crate::visibility::ism::{ImperfectShadowMaps, nearest_vpl_weights_among};
+use crate::visibility::node_maps::NodeMaps;
 use crate::visibility::vsm::VarianceShadowMap;
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
@@ -71,7 +72,8 @@ pub struct SgTimes {
     pub tree: f64,
     /// Variance shadow maps (`--visibility vsm|approx`; 0 otherwise).
     pub shadow_maps: f64,
-    /// VPLs, their imperfect shadow maps and every node's 3 nearest (`--visibility approx`).
+    /// The visibility maps between reflectors and receivers (`--visibility approx`): the maps
+    /// at tree nodes, or the VPLs, their imperfect shadow maps and every node's 3 nearest.
     pub vpls: f64,
     pub lighting: f64,
     pub primary: f64,
@@ -103,6 +105,8 @@ pub struct SgStats {
     pub leaves_evaluated_per_pixel: f64,
     /// Shadow rays between receivers and reflectors.
     pub visibility_rays: u64,
+    /// Visibility maps at tree nodes (`--visibility approx`), summed over the lights.
+    pub node_maps: usize,
     pub nonfinite_samples: u64,
     pub seconds: SgTimes,
 }
@@ -225,12 +229,26 @@ pub fn render_sg(
     let vpl_vis: Vec<Option<VplVisibility>> =
         if opts.visibility == Visibility::Approx && !lits.is_empty() {
             let sources = vpl::sources(scene);
+            let ism = &scene.settings.ism;
             scene
                 .lights
                 .iter()
                 .zip(&maps)
                 .enumerate()
                 .map(|(k, (light, map))| {
+                    if ism.node_maps > 0 {
+                        let far = 2.0 * scene.mesh.diagonal().max(1e-3);
+                        let maps = NodeMaps::build(
+                            accel,
+                            &lits[k],
+                            ism.node_maps as usize,
+                            ism.resolution,
+                            ism.bias,
+                            eps,
+                            far,
+                        );
+                        return Some(VplVisibility::Nodes(maps));
+                    }
                     let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
                     let vpls = vpl::generate(
                         &sources,
@@ -239,7 +257,7 @@ pub fn render_sg(
                         opts.seed ^ k as u64,
                         &visible,
                     );
-                    Some(VplVisibility::new(
+                    Some(VplVisibility::nearest_vpls(
                         scene,
                         &tree,
                         &pieces,
@@ -252,6 +270,14 @@ pub fn render_sg(
             Vec::new()
         };
     stats.seconds.vpls = t.elapsed().as_secs_f64();
+    stats.node_maps = vpl_vis
+        .iter()
+        .flatten()
+        .map(|v| match v {
+            VplVisibility::Nodes(m) => m.len(),
+            VplVisibility::NearestVpls(_) => 0,
+        })
+        .sum();
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
     }
@@ -284,6 +310,17 @@ pub fn render_sg(
         lits: &lits,
         maps: &maps,
         vpl_vis: &vpl_vis,
+        leaf_of: if brute && !vpl_vis.is_empty() {
+            let mut leaf_of = vec![0u32; tree.tri_order.len()];
+            for (i, n) in tree.nodes.iter().enumerate() {
+                if n.is_leaf() {
+                    leaf_of[n.first as usize] = i as u32;
+                }
+            }
+            leaf_of
+        } else {
+            Vec::new()
+        },
         opts,
         brute,
         camera_pos: camera.position,
@@ -491,18 +528,23 @@ pub fn render_sg_quiet(scene: &Scene, accel: &Accel, opts: &SgOptions) -> (Image
     render_sg(scene, accel, opts, &p).expect("not cancelled")
 }
 
-/// VPL-based visibility between reflectors and receivers for one light: the VPLs' imperfect
-/// shadow maps and, per tree node, the interpolation weights of its 3 nearest VPLs (from the
-/// node's area-weighted centroid).
-struct VplVisibility {
+/// The visibility between reflectors and receivers for one light under `--visibility
+/// approx`: ray-cast maps at tree nodes (`[visibility] node_maps` > 0, the default), or the
+/// paper's proxy (`node_maps = 0`).
+enum VplVisibility {
+    Nodes(NodeMaps),
+    NearestVpls(NearestVpls),
+}
+
+/// The paper's proxy: the VPLs' imperfect shadow maps and, per tree node, the interpolation
+/// weights of its 3 nearest VPLs (from the node's area-weighted centroid).
+struct NearestVpls {
     ism: ImperfectShadowMaps,
     weights: Vec<[(u32, f32); 3]>,
-    /// Tree node of each leaf position (`tri_order` index).
-    leaf_of: Vec<u32>,
 }
 
 impl VplVisibility {
-    fn new(
+    fn nearest_vpls(
         scene: &Scene,
         tree: &ReflectorTree,
         pieces: &[ReflectorPiece],
@@ -532,22 +574,15 @@ impl VplVisibility {
                 nearest_vpl_weights_among(n.centroid, &accept, vpls)
             })
             .collect();
-        let mut leaf_of = vec![0u32; tree.tri_order.len()];
-        for (i, n) in tree.nodes.iter().enumerate() {
-            if n.is_leaf() {
-                leaf_of[n.first as usize] = i as u32;
-            }
-        }
-        VplVisibility {
-            ism,
-            weights,
-            leaf_of,
-        }
+        VplVisibility::NearestVpls(NearestVpls { ism, weights })
     }
 
     /// Visibility of tree node `node` from receiver point `x`.
     fn node(&self, node: u32, x: Vec3) -> f32 {
-        self.ism.interpolated(&self.weights[node as usize], x)
+        match self {
+            VplVisibility::Nodes(m) => m.visibility(node, x),
+            VplVisibility::NearestVpls(v) => v.ism.interpolated(&v.weights[node as usize], x),
+        }
     }
 }
 
@@ -567,8 +602,10 @@ struct Ctx<'a> {
     lits: &'a [LitScene<'a>],
     /// Per light: its variance shadow map (`--visibility vsm`), or none (shadow rays).
     maps: &'a [Option<VarianceShadowMap>],
-    /// Per light: VPLs with imperfect shadow maps (`--visibility approx`; empty otherwise).
+    /// Per light: the visibility maps of `--visibility approx` (empty otherwise).
     vpl_vis: &'a [Option<VplVisibility>],
+    /// Tree node of each leaf position (`tri_order` index), for `sg-brute` with those maps.
+    leaf_of: Vec<u32>,
     opts: &'a SgOptions,
     brute: bool,
     camera_pos: Vec3,
@@ -747,7 +784,7 @@ impl Ctx<'_> {
                     let v = t.shade(sp.p, &rx, &lit.receiver);
                     if v != Vec3::ZERO {
                         let f = match self.vpl_vis(k) {
-                            Some(vv) => vv.node(vv.leaf_of[pos], xo),
+                            Some(vv) => vv.node(self.leaf_of[pos], xo),
                             None => {
                                 let (f, r) = self.triangle_visibility(xo, t, k, &rx);
                                 rays += r;

@@ -71,6 +71,7 @@ impl Setup {
             lits,
             maps: &[],
             vpl_vis: &[],
+            leaf_of: Vec::new(),
             opts: &self.opts,
             brute: self.opts.brute,
             camera_pos: self

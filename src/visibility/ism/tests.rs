@@ -108,9 +108,29 @@ fn setup(occluder: bool) -> Setup {
 /// The share of (VPL, receiver) pairs above the VPL's horizon on which the maps (visible when
 /// > 0.5) agree with a shadow ray, and the share of the visible pairs the maps call visible.
 fn agreement(s: &Setup) -> (f64, f64) {
-    let accel = Accel::build(&s.positions, &s.indices);
     let maps =
         ImperfectShadowMaps::build(&s.positions, &s.indices, &s.vpls, &IsmOptions::default(), 1);
+    agreement_of(s, &maps)
+}
+
+/// [`agreement`] of maps made by ray casting at the VPLs (what the maps at tree nodes are).
+fn ray_cast_agreement(s: &Setup) -> (f64, f64) {
+    let accel = Accel::build(&s.positions, &s.indices);
+    let origins: Vec<MapOrigin> = s
+        .vpls
+        .iter()
+        .map(|v| MapOrigin {
+            position: v.position + v.normal * 1e-4,
+            normal: v.normal,
+        })
+        .collect();
+    let o = IsmOptions::default();
+    let maps = ImperfectShadowMaps::ray_cast(&accel, &origins, o.resolution, o.bias, 30.0);
+    agreement_of(s, &maps)
+}
+
+fn agreement_of(s: &Setup, maps: &ImperfectShadowMaps) -> (f64, f64) {
+    let accel = Accel::build(&s.positions, &s.indices);
     assert_eq!(maps.len(), s.vpls.len());
     let (mut agree, mut total, mut vis, mut vis_kept) = (0usize, 0usize, 0usize, 0usize);
     for (i, vpl) in s.vpls.iter().enumerate() {
@@ -159,6 +179,38 @@ fn occluded_pairs_match_shadow_rays() {
     let (rate, kept) = agreement(&setup(true));
     println!("occluder: agreement {rate:.4}, visible kept {kept:.4}");
     assert!(rate >= 0.96, "agreement {rate}");
+}
+
+/// Ray-cast maps (one ray per texel, the visibility maps at tree nodes): no occluder, every
+/// pair visible (measured 100 %: the lit plane is at t ≤ μ once the 2 % bias is applied);
+/// under the occluder ≥ 98 % agreement with shadow rays (measured 98.7 %, splatting 98.4 %: the
+/// rest lie within a texel of the shadows' edges, where the bilinear moments blur).
+#[test]
+fn ray_cast_maps_match_shadow_rays() {
+    let (free, _) = ray_cast_agreement(&setup(false));
+    let (occluded, kept) = ray_cast_agreement(&setup(true));
+    println!(
+        "ray-cast maps: no occluder {free:.4}, occluder {occluded:.4} (visible kept {kept:.4})"
+    );
+    assert!(free >= 0.999, "agreement without occluder {free}");
+    assert!(occluded >= 0.98, "agreement under the occluder {occluded}");
+}
+
+/// Below a map's horizon it knows nothing: `visibility_above_horizon` says so (None) and
+/// `visibility` reads it as dark, as a VPL lights nothing there.
+#[test]
+fn below_the_horizon_is_unknown() {
+    let s = setup(false);
+    let maps =
+        ImperfectShadowMaps::build(&s.positions, &s.indices, &s.vpls, &IsmOptions::default(), 1);
+    let below = s.vpls[0].position - Vec3::Y;
+    assert_eq!(maps.visibility_above_horizon(0, below), None);
+    assert_eq!(maps.visibility(0, below), 0.0);
+    let above = s.vpls[0].position + Vec3::new(0.3, 2.0, -0.2);
+    assert_eq!(
+        maps.visibility_above_horizon(0, above),
+        Some(maps.visibility(0, above))
+    );
 }
 
 fn vpl_at(position: Vec3) -> Vpl {
