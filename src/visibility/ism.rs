@@ -160,7 +160,7 @@ impl ImperfectShadowMaps {
         let maps: Vec<(Vec<Vec2>, f32)> = origins
             .par_iter()
             .map(|&(y, frame)| {
-                let mut nearest_far = 0.0f32;
+                let mut deepest = 0.0f32;
                 let map = (0..res * res)
                     .map(|k| {
                         let (j, i) = (k / res, k % res);
@@ -176,13 +176,13 @@ impl ImperfectShadowMaps {
                         let z = accel
                             .intersect(y, frame.to_world(d), 0.0, far)
                             .map_or(far, |h| {
-                                nearest_far = nearest_far.max(h.t);
+                                deepest = deepest.max(h.t);
                                 h.t
                             });
                         Vec2::new(z, z * z)
                     })
                     .collect();
-                (map, min_variance(nearest_far.max(1e-3)))
+                (map, min_variance(deepest.max(1e-3)))
             })
             .collect();
         ImperfectShadowMaps {

@@ -224,31 +224,36 @@ pub fn render_sg(
         return None;
     }
 
-    // VPLs and their imperfect shadow maps (`--visibility approx`), per light.
+    // The visibility maps between reflectors and receivers (`--visibility approx`), per light:
+    // at the tree's nodes, or (`node_maps = 0`) the VPLs' imperfect shadow maps.
     let t = Instant::now();
-    let vpl_vis: Vec<Option<VplVisibility>> =
-        if opts.visibility == Visibility::Approx && !lits.is_empty() {
+    let ism = &scene.settings.ism;
+    let vpl_vis: Vec<Option<ApproxVisibility>> =
+        if opts.visibility != Visibility::Approx || lits.is_empty() {
+            Vec::new()
+        } else if ism.node_maps > 0 {
+            let far = 2.0 * scene.mesh.diagonal().max(1e-3);
+            lits.iter()
+                .map(|lit| {
+                    Some(ApproxVisibility::Nodes(NodeMaps::build(
+                        accel,
+                        lit,
+                        ism.node_maps as usize,
+                        ism.resolution,
+                        ism.bias,
+                        eps,
+                        far,
+                    )))
+                })
+                .collect()
+        } else {
             let sources = vpl::sources(scene);
-            let ism = &scene.settings.ism;
             scene
                 .lights
                 .iter()
                 .zip(&maps)
                 .enumerate()
                 .map(|(k, (light, map))| {
-                    if ism.node_maps > 0 {
-                        let far = 2.0 * scene.mesh.diagonal().max(1e-3);
-                        let maps = NodeMaps::build(
-                            accel,
-                            &lits[k],
-                            ism.node_maps as usize,
-                            ism.resolution,
-                            ism.bias,
-                            eps,
-                            far,
-                        );
-                        return Some(VplVisibility::Nodes(maps));
-                    }
                     let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
                     let vpls = vpl::generate(
                         &sources,
@@ -257,7 +262,7 @@ pub fn render_sg(
                         opts.seed ^ k as u64,
                         &visible,
                     );
-                    Some(VplVisibility::nearest_vpls(
+                    Some(ApproxVisibility::nearest_vpls(
                         scene,
                         &tree,
                         &pieces,
@@ -266,17 +271,12 @@ pub fn render_sg(
                     ))
                 })
                 .collect()
-        } else {
-            Vec::new()
         };
     stats.seconds.vpls = t.elapsed().as_secs_f64();
     stats.node_maps = vpl_vis
         .iter()
         .flatten()
-        .map(|v| match v {
-            VplVisibility::Nodes(m) => m.len(),
-            VplVisibility::NearestVpls(_) => 0,
-        })
+        .map(ApproxVisibility::node_maps)
         .sum();
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
@@ -531,7 +531,7 @@ pub fn render_sg_quiet(scene: &Scene, accel: &Accel, opts: &SgOptions) -> (Image
 /// The visibility between reflectors and receivers for one light under `--visibility
 /// approx`: ray-cast maps at tree nodes (`[visibility] node_maps` > 0, the default), or the
 /// paper's proxy (`node_maps = 0`).
-enum VplVisibility {
+enum ApproxVisibility {
     Nodes(NodeMaps),
     NearestVpls(NearestVpls),
 }
@@ -543,14 +543,14 @@ struct NearestVpls {
     weights: Vec<[(u32, f32); 3]>,
 }
 
-impl VplVisibility {
+impl ApproxVisibility {
     fn nearest_vpls(
         scene: &Scene,
         tree: &ReflectorTree,
         pieces: &[ReflectorPiece],
         vpls: &[Vpl],
         seed: u64,
-    ) -> VplVisibility {
+    ) -> ApproxVisibility {
         let ism = ImperfectShadowMaps::build(
             &scene.mesh.positions,
             &scene.mesh.indices,
@@ -574,14 +574,22 @@ impl VplVisibility {
                 nearest_vpl_weights_among(n.centroid, &accept, vpls)
             })
             .collect();
-        VplVisibility::NearestVpls(NearestVpls { ism, weights })
+        ApproxVisibility::NearestVpls(NearestVpls { ism, weights })
+    }
+
+    /// How many maps sit at tree nodes (0 for the paper's proxy).
+    fn node_maps(&self) -> usize {
+        match self {
+            ApproxVisibility::Nodes(m) => m.len(),
+            ApproxVisibility::NearestVpls(_) => 0,
+        }
     }
 
     /// Visibility of tree node `node` from receiver point `x`.
     fn node(&self, node: u32, x: Vec3) -> f32 {
         match self {
-            VplVisibility::Nodes(m) => m.visibility(node, x),
-            VplVisibility::NearestVpls(v) => v.ism.interpolated(&v.weights[node as usize], x),
+            ApproxVisibility::Nodes(m) => m.visibility(node, x),
+            ApproxVisibility::NearestVpls(v) => v.ism.interpolated(&v.weights[node as usize], x),
         }
     }
 }
@@ -603,7 +611,7 @@ struct Ctx<'a> {
     /// Per light: its variance shadow map (`--visibility vsm`), or none (shadow rays).
     maps: &'a [Option<VarianceShadowMap>],
     /// Per light: the visibility maps of `--visibility approx` (empty otherwise).
-    vpl_vis: &'a [Option<VplVisibility>],
+    vpl_vis: &'a [Option<ApproxVisibility>],
     /// Tree node of each leaf position (`tri_order` index), for `sg-brute` with those maps.
     leaf_of: Vec<u32>,
     opts: &'a SgOptions,
@@ -617,8 +625,9 @@ impl Ctx<'_> {
         self.maps.get(k).and_then(Option::as_ref)
     }
 
-    /// Light `k`'s VPLs with imperfect shadow maps, under `--visibility approx`.
-    fn vpl_vis(&self, k: usize) -> Option<&VplVisibility> {
+    /// Light `k`'s visibility maps between reflectors and receivers, under `--visibility
+    /// approx`.
+    fn vpl_vis(&self, k: usize) -> Option<&ApproxVisibility> {
         self.vpl_vis.get(k).and_then(Option::as_ref)
     }
 

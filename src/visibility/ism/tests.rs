@@ -110,7 +110,7 @@ fn setup(occluder: bool) -> Setup {
 fn agreement(s: &Setup) -> (f64, f64) {
     let maps =
         ImperfectShadowMaps::build(&s.positions, &s.indices, &s.vpls, &IsmOptions::default(), 1);
-    agreement_of(s, &maps)
+    agreement_of(s, &maps, &Accel::build(&s.positions, &s.indices))
 }
 
 /// [`agreement`] of maps made by ray casting at the VPLs (what the maps at tree nodes are).
@@ -126,11 +126,11 @@ fn ray_cast_agreement(s: &Setup) -> (f64, f64) {
         .collect();
     let o = IsmOptions::default();
     let maps = ImperfectShadowMaps::ray_cast(&accel, &origins, o.resolution, o.bias, 30.0);
-    agreement_of(s, &maps)
+    agreement_of(s, &maps, &accel)
 }
 
-fn agreement_of(s: &Setup, maps: &ImperfectShadowMaps) -> (f64, f64) {
-    let accel = Accel::build(&s.positions, &s.indices);
+/// [`agreement`] of `maps`, shadow rays through `accel` (the setup's scene).
+fn agreement_of(s: &Setup, maps: &ImperfectShadowMaps, accel: &Accel) -> (f64, f64) {
     assert_eq!(maps.len(), s.vpls.len());
     let (mut agree, mut total, mut vis, mut vis_kept) = (0usize, 0usize, 0usize, 0usize);
     for (i, vpl) in s.vpls.iter().enumerate() {
