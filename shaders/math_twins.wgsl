@@ -7,6 +7,10 @@
 // The node-bound twin's rows: a node and a receiver each, the point in `queries[i].a.xyz`.
 @group(0) @binding(3) var<storage, read> nodes: array<GpuNodeBound>;
 @group(0) @binding(4) var<storage, read> receivers: array<GpuReceiver>;
+// The transport twins' rows: a lit triangle or a lit node each, the point in `queries[i].a.xyz`,
+// the receiver's direction across its plane of incidence in `b.xyz`, the light in `c.xyz`.
+@group(0) @binding(5) var<storage, read> leaves: array<GpuLeaf>;
+@group(0) @binding(6) var<storage, read> lit_nodes: array<GpuLitNode>;
 
 @compute @workgroup_size(64)
 fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -39,6 +43,15 @@ fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         case 6u: {
             r = vec4<f32>(node_bound(nodes[i], q.a.xyz, receivers[i]), 0.0);
+        }
+        case 9u: {
+            r.x = cosine_weighted(GpuSg(q.a.xyz, q.a.w, vec3<f32>(1.0), 0.0), vec3<f32>(q.b.w, q.c.w, q.d.w), q.b.xyz, q.c.xyz, q.d.xyz);
+        }
+        case 7u: {
+            r = vec4<f32>(lit_triangle_shade(leaves[i], q.a.xyz, receivers[i], q.b.xyz), 0.0);
+        }
+        case 8u: {
+            r = vec4<f32>(lit_scene_cluster(lit_nodes[i], q.c.xyz, q.a.xyz, receivers[i], q.b.xyz), 0.0);
         }
         default: {
             r = vec4<f32>(-1.0);

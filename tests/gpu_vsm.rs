@@ -115,40 +115,22 @@ fn a_moved_light_is_detected() {
 #[test]
 fn sg_images_with_gpu_shadow_maps_match_the_cpu_ones() {
     use interreflect::compare::metrics;
-    use interreflect::cut::CutOptions;
-    use interreflect::render::cpu::Progress;
-    use interreflect::render::cpu::reference::no_progress;
-    use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg};
+    use interreflect::render::cpu::sg::CutMode;
     use interreflect::render::{Device, Visibility};
-    use std::sync::atomic::AtomicBool;
 
     let Some(_gpu) = common::gpu() else { return };
-    let cancel = AtomicBool::new(false);
-    let progress = Progress {
-        done: &no_progress,
-        cancel: &cancel,
-    };
     for name in ["ring", "bunny", "dragon"] {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
-        let scene = Scene::load(&path).unwrap();
-        let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+        let (scene, accel) = common::scene_and_accel(name);
         let render = |device: Device| {
-            let opts = SgOptions {
-                width: 32,
-                height: (32 * scene.camera.height / scene.camera.width).max(1),
-                spp: 1,
-                seed: 3,
-                direct: true,
-                indirect: true,
-                brute: false,
-                cut: CutOptions::default(),
-                mode: CutMode::Pixel,
-                max_edge: scene.mesh.diagonal() / 128.0,
-                visibility: Visibility::Vsm,
+            common::sg_render(
+                &scene,
+                &accel,
+                32,
+                true,
+                CutMode::Pixel,
+                Visibility::Vsm,
                 device,
-            };
-            render_sg(&scene, &accel, &opts, &progress).expect("not cancelled")
+            )
         };
         let (cpu_img, cpu_stats) = render(Device::Cpu);
         let (gpu_img, gpu_stats) = render(Device::Gpu);

@@ -94,3 +94,92 @@ struct GpuCamera {
     up: vec3<f32>,
     _pad: f32,
 }
+
+// The SG shading passes' uniform (`render::gpu::sg_shade`): the light the lobes were aimed
+// from, this dispatch's (point, cut node) pairs (`count` from `first`) and points (`point_first`
+// to `point_end`), and the node maps' resolution and depth bias.
+struct GpuShadeParams {
+    light_pos: vec3<f32>,
+    count: u32,
+    first: u32,
+    point_first: u32,
+    point_end: u32,
+    map_res: u32,
+    map_bias: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// One pixel sample on a receiver: its point x, the point offset along the geometric normal that
+// visibility is looked up from, its cut (`cut_count` entries of `cut_nodes` from `cut_start`),
+// the index of its first (point, node) pair, the direction across its plane of incidence and
+// its BRDF lobes.
+struct GpuShadePoint {
+    x: vec3<f32>,
+    cut_start: u32,
+    xo: vec3<f32>,
+    cut_count: u32,
+    across: vec3<f32>,
+    pair_start: u32,
+    receiver: GpuReceiver,
+}
+
+// Per-slot sums of the lobes under a node (`cut::NodeLobe`).
+struct GpuNodeLobe {
+    energy: vec3<f32>,
+    inv_sharpness_sum: f32,
+    axis_sum: vec3<f32>,
+    _pad: f32,
+}
+
+// A tree node lit by one light (`cut::LitNode` with its bound's inputs): `leaf` indexes the
+// leaves for a leaf node (0xffffffff otherwise), `map` the node maps (0xffffffff: none).
+struct GpuLitNode {
+    bound: GpuNodeBound,
+    centroid: vec3<f32>,
+    weight: f32,
+    normal_sum: vec3<f32>,
+    area: f32,
+    diffuse: vec3<f32>,
+    leaf: u32,
+    lobes: array<GpuNodeLobe, 4>,
+    half_vector: u32,
+    map: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// A lit reflector triangle (`cut::LitTriangle` and its `transport::reflector::ReflectedSg`).
+struct GpuLeaf {
+    v0: vec3<f32>,
+    has_sg: u32,
+    v1: vec3<f32>,
+    lobe_count: u32,
+    v2: vec3<f32>,
+    half_vector: u32,
+    diffuse: vec3<f32>,
+    stretch: f32,
+    normal: vec3<f32>,
+    _pad0: f32,
+    geometric_normal: vec3<f32>,
+    _pad1: f32,
+    origin: vec3<f32>,
+    _pad2: f32,
+    light: vec3<f32>,
+    _pad3: f32,
+    lobes: array<GpuSg, 4>,
+}
+
+// The origin of a visibility map at a tree node (`visibility::node_maps`): its position, the
+// frame (t, b, n) of its paraboloid and the map's variance floor.
+struct GpuMapOrigin {
+    position: vec3<f32>,
+    min_variance: f32,
+    t: vec3<f32>,
+    _pad0: f32,
+    b: vec3<f32>,
+    _pad1: f32,
+    n: vec3<f32>,
+    _pad2: f32,
+}

@@ -23,12 +23,21 @@ fn lobe_integral(sharpness: f32) -> f32 {
     return 4.0 * PI;
 }
 
-// ∫_{S²} G1 G2 dω of two lobes (`math::sg::Sg::inner_product`): with v = λ1 p1 + λ2 p2 and
-// λ = |v|, e^{λ − λ1 − λ2} lobe_integral(λ), the exponent in the stable form
-// −λ1 λ2 |p1 − p2|² / (λ + λ1 + λ2).
-fn sg_inner_product(a: GpuSg, b: GpuSg) -> vec3<f32> {
-    let l1 = max(a.sharpness, 0.0);
-    let l2 = max(b.sharpness, 0.0);
+// `math::sg::MAX_SHARPNESS`.
+const MAX_SHARPNESS: f32 = 1e30;
+
+// `math::sg::clean_sharpness`: NaN and negative values are 0, huge ones clamped.
+fn clean_sharpness(l: f32) -> f32 {
+    if (l > 0.0) {
+        return min(l, MAX_SHARPNESS);
+    }
+    return 0.0;
+}
+
+// `Sg::product` (the Rust twin computes the exponent in f64).
+fn sg_product(a: GpuSg, b: GpuSg) -> GpuSg {
+    let l1 = clean_sharpness(a.sharpness);
+    let l2 = clean_sharpness(b.sharpness);
     let v = a.axis * l1 + b.axis * l2;
     let l = length(v);
     let denom = l + l1 + l2;
@@ -37,7 +46,22 @@ fn sg_inner_product(a: GpuSg, b: GpuSg) -> vec3<f32> {
         let d = a.axis - b.axis;
         log_scale = -(l1 * l2) * dot(d, d) / denom;
     }
-    return a.amplitude * b.amplitude * (exp(log_scale) * lobe_integral(l));
+    var p = a.axis;
+    if (l > 0.0) {
+        p = v / l;
+    }
+    return GpuSg(p, l, a.amplitude * b.amplitude * exp(log_scale), 0.0);
+}
+
+// `Sg::integral`.
+fn sg_integral(s: GpuSg) -> vec3<f32> {
+    return s.amplitude * lobe_integral(clean_sharpness(s.sharpness));
+}
+
+// ∫_{S²} G1 G2 dω of two lobes (`math::sg::Sg::inner_product`): the integral of their product
+// lobe, e^{λ − λ1 − λ2} lobe_integral(λ) with λ = |λ1 p1 + λ2 p2|.
+fn sg_inner_product(a: GpuSg, b: GpuSg) -> vec3<f32> {
+    return sg_integral(sg_product(a, b));
 }
 
 // Chebyshev's upper bound of the lit fraction P(z ≥ t) from the moments (E[z], E[z²])
@@ -155,15 +179,25 @@ fn gl_side(f: EdgeFrame, t_start: f32, t_end: f32, far: bool) -> f32 {
     let dir = select(1.0, -1.0, far);
     var total = 0.0;
     var t = t_start;
+    // The last piece ends at t_end: no return from inside the loop (see docs/gpu.md, "Early
+    // returns in loops").
+    var ended = false;
     for (var i = 0u; i < 5u; i = i + 1u) {
         let y = y_start + offsets[i];
-        if (y >= y_end || !(f.k > 0.0)) {
-            return total + dir * gl_piece(f, t, t_end, far);
+        ended = y >= y_end || !(f.k > 0.0);
+        var t_next = t_end;
+        if (!ended) {
+            let x = y / f.lam;
+            t_next = clamp(gl_t_at(f, select(x, 2.0 - x, far)), lo, hi);
         }
-        let x = y / f.lam;
-        let t_next = clamp(gl_t_at(f, select(x, 2.0 - x, far)), lo, hi);
         total += dir * gl_piece(f, t, t_next, far);
         t = t_next;
+        if (ended) {
+            break;
+        }
+    }
+    if (ended) {
+        return total;
     }
     if (!far) {
         let psi_end = atan2(2.0 * t_end, f.s0 * (1.0 - t_end * t_end));

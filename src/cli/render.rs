@@ -76,7 +76,9 @@ pub struct RenderArgs {
     #[arg(long, short)]
     pub quiet: bool,
     /// Where passes that have a GPU version run (so far: prt's relighting, and the shadow maps
-    /// of point lights for sg and vpl with --visibility vsm or approx).
+    /// of point lights for sg and vpl with --visibility vsm or approx). `gpu` also shades sg's
+    /// indirect light on the GPU with --cut vertex and --visibility approx (not `auto`: on a
+    /// software GPU it is slower than the CPU so far, docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Device::Auto)]
     pub device: Device,
     /// prt: SH order, bands l < order (default: methods.prt.order).
@@ -528,6 +530,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         )
     } else if is_sg {
         shadow_map_device_check(&args)?;
+        if args.device == Device::Gpu
+            && args.method == Method::Sg
+            && (cut_mode != CutMode::Vertex || args.visibility != Visibility::Approx)
+        {
+            eprintln!(
+                "notice: sg shades its indirect light on the GPU only with --cut vertex and --visibility approx; shading on the CPU"
+            );
+        }
         let opts = SgOptions {
             width,
             height,
@@ -549,6 +559,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             return Ok(interrupted());
         };
         shadow_map_fallback(&args, &stats.shadow_maps_on)?;
+        gpu_shading_fallback(&args, &stats.shading_on)?;
         let s = &stats;
         log(format!(
             "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
@@ -569,6 +580,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             s.seconds.vertex_cuts,
             s.seconds.shading
         ));
+        if let Some(adapter) = s.shading_on.strip_prefix("gpu ") {
+            let bytes: u64 = s.gpu_uploads.iter().map(|u| u.bytes).sum();
+            log(format!(
+                "sg shading on the GPU {adapter}: {:.2} s, {} nodes, {} leaves and {} maps uploaded ({:.1} MiB)",
+                s.seconds.gpu_shading,
+                s.gpu_uploads.iter().map(|u| u.nodes).sum::<usize>(),
+                s.gpu_uploads.iter().map(|u| u.leaves).sum::<usize>(),
+                s.gpu_uploads.iter().map(|u| u.maps).sum::<usize>(),
+                bytes as f64 / (1u64 << 20) as f64
+            ));
+        }
         if args.visibility == Visibility::Approx {
             log(format!(
                 "sg visibility: shadow maps {:.2} s; {} {:.2} s",
@@ -794,16 +816,36 @@ fn shadow_map_device_check(args: &RenderArgs) -> anyhow::Result<()> {
 /// Where the shadow maps were made ("cpu (why)" when the GPU was asked for and not used): an
 /// error with `--device gpu`, a one-line notice with `--device auto`.
 fn shadow_map_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
+    gpu_fallback(
+        args,
+        on,
+        "the shadow maps could not be made on the GPU",
+        "shadow maps made on the CPU",
+    )
+}
+
+/// Where sg's indirect light was shaded ("cpu (why)" when the GPU was asked for and failed):
+/// an error with `--device gpu`.
+fn gpu_shading_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
+    gpu_fallback(
+        args,
+        on,
+        "the indirect light could not be shaded on the GPU",
+        "indirect light shaded on the CPU",
+    )
+}
+
+/// A stage's place `on` ("cpu (why)" when the GPU was not used): `failed: why` as an error
+/// with `--device gpu`, `notice: why` on stderr otherwise.
+fn gpu_fallback(args: &RenderArgs, on: &str, failed: &str, notice: &str) -> anyhow::Result<()> {
     let Some(why) = on.strip_prefix("cpu (") else {
         return Ok(());
     };
     let why = why.strip_suffix(')').unwrap_or(why);
     match args.device {
-        Device::Gpu => {
-            anyhow::bail!("--device gpu: the shadow maps could not be made on the GPU: {why}")
-        }
+        Device::Gpu => anyhow::bail!("--device gpu: {failed}: {why}"),
         _ => {
-            eprintln!("notice: shadow maps made on the CPU: {why}");
+            eprintln!("notice: {notice}: {why}");
             Ok(())
         }
     }

@@ -131,6 +131,11 @@ impl ReceiverLobes {
         &self.lobes[..self.len]
     }
 
+    /// Unit direction across the plane of incidence, which half-vector lobes are narrow across.
+    pub fn across(&self) -> Vec3 {
+        self.across
+    }
+
     /// The anisotropy of the lobes (≥ 1): their sharpness is as low as 1/stretch of
     /// [`Sg::sharpness`] in the plane of incidence.
     pub fn stretch(&self) -> f32 {
@@ -171,9 +176,12 @@ pub fn one_bounce_with(
     let to_x = x - centroid;
     // The geometric plane decides, not the shading normal: on a curved mesh a neighbour's
     // interpolated normal can face a receiver that lies behind the neighbour's plane (a firefly:
-    // a bunny point lit 500× too brightly by the piece next to it).
-    if !(to_x.dot(refl.geometric_normal) > 1e-4 * to_x.length())
-        || rx.len == 0 && rx.diffuse == Vec3::ZERO
+    // a bunny point lit 500× too brightly by the piece next to it). The margin counts the
+    // triangle's size as well as the distance: a receiver point inside the triangle itself, near
+    // its centroid, would otherwise pass on rounding alone (a wall point lit by its own piece,
+    // found by the GPU twin, which rounded it differently).
+    let reach = to_x.length() + (tri[0] - centroid).length();
+    if !(to_x.dot(refl.geometric_normal) > 1e-4 * reach) || rx.len == 0 && rx.diffuse == Vec3::ZERO
     {
         return Vec3::ZERO;
     }

@@ -70,6 +70,16 @@ pub struct ImperfectShadowMaps {
     min_variance: Vec<f32>,
 }
 
+/// The maps as the GPU reads them: texels per side, each map's origin and frame, the atlas
+/// (map after map), each map's variance floor and the depth bias.
+pub(crate) struct MapParts<'a> {
+    pub res: usize,
+    pub origins: &'a [(Vec3, Frame)],
+    pub atlas: &'a [Vec2],
+    pub min_variance: &'a [f32],
+    pub bias: f32,
+}
+
 impl ImperfectShadowMaps {
     /// Splats the scene (triangles `positions`/`indices`) into one map per VPL.
     pub fn build(
@@ -191,6 +201,17 @@ impl ImperfectShadowMaps {
             min_variance: maps.iter().map(|m| m.1).collect(),
             atlas: maps.into_iter().flat_map(|m| m.0).collect(),
             bias,
+        }
+    }
+
+    /// What the GPU reads (`render::gpu::sg_shade`).
+    pub(crate) fn parts(&self) -> MapParts<'_> {
+        MapParts {
+            res: self.res,
+            origins: &self.origins,
+            atlas: &self.atlas,
+            min_variance: &self.min_variance,
+            bias: self.bias,
         }
     }
 

@@ -132,6 +132,12 @@ impl NodeMaps {
         NodeMaps { maps, map_of }
     }
 
+    /// The maps and, per tree node, the index of the map it reads (`u32::MAX`: none), for the
+    /// GPU (`render::gpu::sg_shade`).
+    pub(crate) fn parts(&self) -> (&ImperfectShadowMaps, &[u32]) {
+        (&self.maps, &self.map_of)
+    }
+
     /// Number of maps.
     pub fn len(&self) -> usize {
         self.maps.len()

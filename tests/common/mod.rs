@@ -14,3 +14,45 @@ pub fn gpu() -> Option<Gpu> {
         }
     }
 }
+
+/// One sg render of `scene` for the GPU-against-CPU tests: `width` pixels wide (the camera's
+/// aspect), 1 spp, seed 3, the default cut, pieces split to 1/128 of the diagonal.
+#[allow(dead_code)] // Not every test binary that shares this module renders sg.
+pub fn sg_render(
+    scene: &interreflect::scene::Scene,
+    accel: &interreflect::accel::Accel,
+    width: u32,
+    direct: bool,
+    mode: interreflect::render::cpu::sg::CutMode,
+    visibility: interreflect::render::Visibility,
+    device: interreflect::render::Device,
+) -> (
+    interreflect::image::Image,
+    interreflect::render::cpu::sg::SgStats,
+) {
+    use interreflect::render::cpu::sg::{SgOptions, render_sg_quiet};
+    let opts = SgOptions {
+        width,
+        height: (width * scene.camera.height / scene.camera.width).max(1),
+        spp: 1,
+        seed: 3,
+        direct,
+        indirect: true,
+        brute: false,
+        cut: interreflect::cut::CutOptions::default(),
+        mode,
+        max_edge: scene.mesh.diagonal() / 128.0,
+        visibility,
+        device,
+    };
+    render_sg_quiet(scene, accel, &opts)
+}
+
+/// An evaluation scene (`scenes/<name>.toml`) and its BVH.
+#[allow(dead_code)] // Not every test binary that shares this module loads scenes.
+pub fn scene_and_accel(name: &str) -> (interreflect::scene::Scene, interreflect::accel::Accel) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
+    let scene = interreflect::scene::Scene::load(&path).unwrap();
+    let accel = interreflect::accel::Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    (scene, accel)
+}

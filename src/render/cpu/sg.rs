@@ -62,7 +62,9 @@ pub struct SgOptions {
     pub max_edge: f32,
     /// Light visibility by shadow rays or by variance shadow maps (the scene's `[visibility]`).
     pub visibility: Visibility,
-    /// Where the stages with a GPU pass run (so far: point lights' shadow maps).
+    /// Where the stages with a GPU pass run: point lights' shadow maps (`auto` or `gpu`), and
+    /// with `gpu` only, the shading over vertex cuts under `--visibility approx` with maps at
+    /// tree nodes (on lavapipe it is slower than the CPU twin so far; docs/gpu.md).
     pub device: Device,
 }
 
@@ -78,6 +80,9 @@ pub struct SgTimes {
     pub lighting: f64,
     pub primary: f64,
     pub vertex_cuts: f64,
+    /// The indirect light on the GPU (`render::gpu::sg_shade`, with `shading_on` "gpu …"):
+    /// gathering and uploading the cuts, the shading itself, the read-back; 0 otherwise.
+    pub gpu_shading: f64,
     pub shading: f64,
 }
 
@@ -88,6 +93,14 @@ pub struct SgStats {
     /// empty without shadow maps.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub shadow_maps_on: String,
+    /// Where the indirect light was shaded, when the GPU was asked to shade it (`--device gpu`
+    /// with `--cut vertex` and `--visibility approx` with maps at tree nodes): "gpu (adapter)",
+    /// or "cpu (why the GPU failed)"; empty otherwise.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub shading_on: String,
+    /// Per light, what the GPU shading uploaded (empty on the CPU).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gpu_uploads: Vec<crate::render::gpu::sg_shade::ShadeUpload>,
     pub reflector_triangles: usize,
     /// Reflector triangles after splitting to `max_edge` (what the tree is built over).
     pub reflector_pieces: usize,
@@ -336,6 +349,31 @@ pub fn render_sg(
     };
     stats.seconds.vertex_cuts = t.elapsed().as_secs_f64();
 
+    // The indirect light over the vertex cuts on the GPU, where it can run there (asked for
+    // with `--device gpu`: on lavapipe it is not yet faster than the CPU, docs/gpu.md).
+    let t = Instant::now();
+    let gpu_ready = opts.device == Device::Gpu
+        && !vpl_vis.is_empty()
+        && vpl_vis
+            .iter()
+            .all(|v| matches!(v, Some(ApproxVisibility::Nodes(_))));
+    let gpu_indirect = match vertex_cuts.as_ref() {
+        Some(vc) if gpu_ready => match ctx.gpu_indirect(&hits, vc, &tally, progress.cancel) {
+            Ok(Some((values, adapter, uploads))) => {
+                stats.shading_on = format!("gpu ({adapter})");
+                stats.gpu_uploads = uploads;
+                Some(values)
+            }
+            Ok(None) => return None,
+            Err(e) => {
+                stats.shading_on = format!("cpu (the GPU failed: {e})");
+                None
+            }
+        },
+        _ => None,
+    };
+    stats.seconds.gpu_shading = t.elapsed().as_secs_f64();
+
     let t = Instant::now();
     let mut img = Image::new(opts.width, opts.height);
     img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -354,6 +392,7 @@ pub fn render_sg(
                 let v = ctx.shade(
                     hits[p * spp + s].as_ref(),
                     vertex_cuts.as_ref(),
+                    gpu_indirect.as_ref().map(|g| g[p * spp + s]),
                     &mut scratch,
                     &tally,
                 );
@@ -751,11 +790,13 @@ impl Ctx<'_> {
         (num / (den * t.light_visibility), rays)
     }
 
-    /// Radiance of one pixel sample.
+    /// Radiance of one pixel sample; with `indirect` (shaded on the GPU) only its direct light
+    /// is computed here.
     fn shade(
         &self,
         hit: Option<&Hit>,
         vertex_cuts: Option<&VertexCuts>,
+        indirect: Option<Vec3>,
         scratch: &mut Vec<CutEntry>,
         tally: &Tally,
     ) -> Vec3 {
@@ -770,6 +811,9 @@ impl Ctx<'_> {
         let mut l = Vec3::ZERO;
         if self.opts.direct {
             l += direct_light(self.scene, self.accel, self.maps, brdf, &sp, wo, self.eps);
+        }
+        if let Some(v) = indirect {
+            return l + v;
         }
         if !self.opts.indirect || !self.scene.tri_object(hit.tri).receiver {
             return l;
@@ -842,6 +886,101 @@ impl Ctx<'_> {
         }
         tally.rays.fetch_add(rays, Ordering::Relaxed);
         l
+    }
+
+    /// The indirect light of every pixel sample over the vertex cuts `cuts`, shaded on the GPU
+    /// (`render::gpu::sg_shade`) with the maps at tree nodes; with the adapter's name and what
+    /// was uploaded per light. `Ok(None)` when cancelled.
+    #[allow(clippy::type_complexity)]
+    fn gpu_indirect(
+        &self,
+        hits: &[Option<Hit>],
+        cuts: &VertexCuts,
+        tally: &Tally,
+        cancel: &std::sync::atomic::AtomicBool,
+    ) -> Result<
+        Option<(
+            Vec<Vec3>,
+            String,
+            Vec<crate::render::gpu::sg_shade::ShadeUpload>,
+        )>,
+        crate::render::gpu::GpuError,
+    > {
+        use crate::render::gpu::sg_shade::{self, LightCuts, ShadePoint};
+        let gpu = crate::render::gpu::Gpu::new()?;
+        let found: Vec<Option<ShadePoint>> = hits
+            .par_iter()
+            .map(|h| {
+                let hit = h.as_ref()?;
+                if !self.scene.tri_object(hit.tri).receiver {
+                    return None;
+                }
+                let p = self.scene.mesh.point(hit.tri, hit.u, hit.v);
+                let wo = (self.camera_pos - p).normalize();
+                let sp = SurfacePoint::from_hit(self.scene, hit, wo)?;
+                let rx = ReceiverLobes::new(self.scene.tri_material(hit.tri), sp.frame.n, wo);
+                (!rx.is_black()).then(|| ShadePoint {
+                    x: sp.p,
+                    xo: sp.offset(self.eps),
+                    vertex: nearest_vertex(self.scene, hit),
+                    rx,
+                })
+            })
+            .collect();
+        let mut index = vec![u32::MAX; hits.len()];
+        let mut points = Vec::new();
+        for (i, p) in found.into_iter().enumerate() {
+            if let Some(p) = p {
+                index[i] = points.len() as u32;
+                points.push(p);
+            }
+        }
+        let lights: Vec<LightCuts> = self
+            .lits
+            .iter()
+            .zip(cuts)
+            .zip(self.vpl_vis)
+            .filter_map(|((lit, cuts), vis)| match vis {
+                Some(ApproxVisibility::Nodes(maps)) => Some(LightCuts { lit, maps, cuts }),
+                _ => None,
+            })
+            .collect();
+        let Some(sg_shade::Shaded {
+            radiance: values,
+            uploads,
+        }) = sg_shade::shade(&gpu, &lights, &points, cancel)?
+        else {
+            return Ok(None);
+        };
+        // The same counts the CPU's evaluation of the cuts makes.
+        for (lit, cuts) in self.lits.iter().zip(cuts) {
+            let (evaluated, leaves) = points
+                .par_iter()
+                .map(|p| {
+                    let cut = &cuts[p.vertex as usize];
+                    let leaves = cut
+                        .iter()
+                        .filter(|&&n| lit.tree.nodes[n as usize].is_leaf())
+                        .count();
+                    (cut.len() as u64, leaves as u64)
+                })
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            tally
+                .shading_points
+                .fetch_add(points.len() as u64, Ordering::Relaxed);
+            tally.add_counters(&CutCounters { evaluated, leaves });
+        }
+        let per_sample = index
+            .iter()
+            .map(|&i| {
+                if i == u32::MAX {
+                    Vec3::ZERO
+                } else {
+                    values[i as usize]
+                }
+            })
+            .collect();
+        Ok(Some((per_sample, gpu.adapter.clone(), uploads)))
     }
 
     /// Selects a cut at every receiver vertex that some sample's nearest vertex is.

@@ -131,6 +131,111 @@ pub struct GpuCamera {
     pub _pad: f32,
 }
 
+/// The SG shading passes' uniform (`super::sg_shade`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShadeParams {
+    /// The position the reflected lobes were aimed from (`LitScene::light_pos`).
+    pub light_pos: [f32; 3],
+    /// (Point, cut node) pairs in this dispatch, and the index of the first.
+    pub count: u32,
+    pub first: u32,
+    /// The points whose pairs these are.
+    pub point_first: u32,
+    pub point_end: u32,
+    /// Texels per side of each node map.
+    pub map_res: u32,
+    pub map_bias: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+/// One pixel sample on a receiver, with its cut and BRDF lobes (`super::sg_shade`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShadePoint {
+    pub x: [f32; 3],
+    pub cut_start: u32,
+    /// The point visibility is looked up from (offset along the geometric normal).
+    pub xo: [f32; 3],
+    pub cut_count: u32,
+    /// Unit direction across the plane of incidence (`ReceiverLobes::across`).
+    pub across: [f32; 3],
+    /// Index of the point's first (point, cut node) pair.
+    pub pair_start: u32,
+    pub receiver: GpuReceiver,
+}
+
+/// Per-slot sums of the lobes under a node (`cut::NodeLobe`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuNodeLobe {
+    pub energy: [f32; 3],
+    pub inv_sharpness_sum: f32,
+    pub axis_sum: [f32; 3],
+    pub _pad: f32,
+}
+
+/// A tree node lit by one light (`cut::LitNode`, with its bound's inputs).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLitNode {
+    pub bound: GpuNodeBound,
+    /// Σ w c / Σ w: the light's centroid under the node.
+    pub centroid: [f32; 3],
+    pub weight: f32,
+    pub normal_sum: [f32; 3],
+    pub area: f32,
+    pub diffuse: [f32; 3],
+    /// Index into the leaves for a leaf node, `u32::MAX` otherwise.
+    pub leaf: u32,
+    pub lobes: [GpuNodeLobe; 4],
+    pub half_vector: u32,
+    /// Index into the node maps, `u32::MAX` for none.
+    pub map: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// A lit reflector triangle (`cut::LitTriangle` and its `ReflectedSg`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLeaf {
+    pub v0: [f32; 3],
+    /// 0 when the triangle is unlit (no lobes, no diffuse part).
+    pub has_sg: u32,
+    pub v1: [f32; 3],
+    pub lobe_count: u32,
+    pub v2: [f32; 3],
+    pub half_vector: u32,
+    pub diffuse: [f32; 3],
+    pub stretch: f32,
+    pub normal: [f32; 3],
+    pub _pad0: f32,
+    pub geometric_normal: [f32; 3],
+    pub _pad1: f32,
+    pub origin: [f32; 3],
+    pub _pad2: f32,
+    pub light: [f32; 3],
+    pub _pad3: f32,
+    pub lobes: [GpuSg; 4],
+}
+
+/// The origin of a visibility map at a tree node: position, paraboloid frame, variance floor.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMapOrigin {
+    pub position: [f32; 3],
+    pub min_variance: f32,
+    pub t: [f32; 3],
+    pub _pad0: f32,
+    pub b: [f32; 3],
+    pub _pad1: f32,
+    pub n: [f32; 3],
+    pub _pad2: f32,
+}
+
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructLayout {
@@ -218,6 +323,76 @@ pub fn layouts() -> Vec<StructLayout> {
             count,
             _pad0,
             _pad1
+        }),
+        layout!(GpuShadeParams {
+            light_pos,
+            count,
+            first,
+            point_first,
+            point_end,
+            map_res,
+            map_bias,
+            _pad0,
+            _pad1,
+            _pad2
+        }),
+        layout!(GpuShadePoint {
+            x,
+            cut_start,
+            xo,
+            cut_count,
+            across,
+            pair_start,
+            receiver
+        }),
+        layout!(GpuNodeLobe {
+            energy,
+            inv_sharpness_sum,
+            axis_sum,
+            _pad
+        }),
+        layout!(GpuLitNode {
+            bound,
+            centroid,
+            weight,
+            normal_sum,
+            area,
+            diffuse,
+            leaf,
+            lobes,
+            half_vector,
+            map,
+            _pad0,
+            _pad1
+        }),
+        layout!(GpuLeaf {
+            v0,
+            has_sg,
+            v1,
+            lobe_count,
+            v2,
+            half_vector,
+            diffuse,
+            stretch,
+            normal,
+            _pad0,
+            geometric_normal,
+            _pad1,
+            origin,
+            _pad2,
+            light,
+            _pad3,
+            lobes
+        }),
+        layout!(GpuMapOrigin {
+            position,
+            min_variance,
+            t,
+            _pad0,
+            b,
+            _pad1,
+            n,
+            _pad2
         }),
     ]
 }

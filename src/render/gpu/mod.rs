@@ -11,6 +11,7 @@
 pub mod gbuffer;
 pub mod layout;
 pub mod prt;
+pub mod sg_shade;
 pub mod shaders;
 pub mod tonemap;
 pub mod twins;

@@ -3,7 +3,7 @@
 //! WGSL has no includes; this concatenation is the only way a pass gets the shared code.
 
 /// The shared files, in the order they are prepended.
-pub const SHARED: [(&str, &str); 2] = [
+pub const SHARED: [(&str, &str); 3] = [
     (
         "shared/layout.wgsl",
         include_str!("../../../shaders/shared/layout.wgsl"),
@@ -12,10 +12,14 @@ pub const SHARED: [(&str, &str); 2] = [
         "shared/math.wgsl",
         include_str!("../../../shaders/shared/math.wgsl"),
     ),
+    (
+        "shared/transport.wgsl",
+        include_str!("../../../shaders/shared/transport.wgsl"),
+    ),
 ];
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 6] = [
+pub const PASSES: [(&str, &str); 8] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -28,6 +32,11 @@ pub const PASSES: [(&str, &str); 6] = [
     ("vsm_blur", include_str!("../../../shaders/vsm_blur.wgsl")),
     ("tonemap", include_str!("../../../shaders/tonemap.wgsl")),
     ("gbuffer", include_str!("../../../shaders/gbuffer.wgsl")),
+    ("sg_shade", include_str!("../../../shaders/sg_shade.wgsl")),
+    (
+        "sg_shade_sum",
+        include_str!("../../../shaders/sg_shade_sum.wgsl"),
+    ),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.

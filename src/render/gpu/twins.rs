@@ -4,7 +4,7 @@
 //! The cut's bound, whose inputs are a tree node and a receiver, has its own pair:
 //! [`run_node_bound`] against `cut::node_bound`.
 
-use super::layout::{GpuNodeBound, GpuReceiver, TwinParams, TwinQuery};
+use super::layout::{GpuLeaf, GpuLitNode, GpuNodeBound, GpuReceiver, TwinParams, TwinQuery};
 use super::{Gpu, GpuError, describe, f32s};
 use crate::math::sg::{Sg, lobe_integral};
 use glam::{Vec2, Vec3};
@@ -25,16 +25,20 @@ pub enum Twin {
     ClampedCosineMean = 4,
     /// `math::spherical_triangle::integrate_sg(a.xyz axis, a.w λ, b.xyz, c.xyz, d.xyz)`.
     IntegrateSg = 5,
+    /// `transport::receiver::cosine_weighted`: the unit-amplitude lobe (a.xyz axis, a.w λ) times
+    /// n·ω over the triangle (b.xyz, c.xyz, d.xyz), n = (b.w, c.w, d.w).
+    CosineWeighted = 9,
 }
 
 impl Twin {
-    pub const ALL: [Twin; 6] = [
+    pub const ALL: [Twin; 7] = [
         Twin::LobeIntegral,
         Twin::SgInnerProduct,
         Twin::ChebyshevUpperBound,
         Twin::ReduceBleeding,
         Twin::ClampedCosineMean,
         Twin::IntegrateSg,
+        Twin::CosineWeighted,
     ];
 
     /// The WGSL function's name (the Rust twin's, a method `T::f` as `t_f`).
@@ -46,6 +50,7 @@ impl Twin {
             Twin::ReduceBleeding => "reduce_bleeding",
             Twin::ClampedCosineMean => "clamped_cosine_mean",
             Twin::IntegrateSg => "integrate_sg",
+            Twin::CosineWeighted => "cosine_weighted",
         }
     }
 }
@@ -79,6 +84,13 @@ pub fn cpu(twin: Twin, q: &TwinQuery) -> [f32; 4] {
             v3(q.c),
             v3(q.d),
         )),
+        Twin::CosineWeighted => one(crate::transport::receiver::cosine_weighted(
+            &Sg::new(v3(q.a), q.a[3], Vec3::ONE),
+            Vec3::new(q.b[3], q.c[3], q.d[3]),
+            v3(q.b),
+            v3(q.c),
+            v3(q.d),
+        )),
     }
 }
 
@@ -93,7 +105,106 @@ fn failed(reason: impl Into<String>) -> GpuError {
 pub fn run(gpu: &Gpu, twin: Twin, queries: &[TwinQuery]) -> Result<Vec<[f32; 4]>, GpuError> {
     let node = [GpuNodeBound::default()];
     let receiver = [GpuReceiver::default()];
-    dispatch(gpu, twin as u32, queries, &node, &receiver)
+    dispatch(
+        gpu,
+        twin as u32,
+        queries,
+        &node,
+        &receiver,
+        &Transport::default(),
+    )
+}
+
+/// The rows of the transport twins beyond the receivers.
+#[derive(Default)]
+struct Transport<'a> {
+    leaves: &'a [GpuLeaf],
+    nodes: &'a [GpuLitNode],
+}
+
+/// Indices of `lit_triangle_shade` and `lit_scene_cluster` in `shaders/math_twins.wgsl`.
+const LEAF_SHADE: u32 = 7;
+const CLUSTER: u32 = 8;
+
+/// One receiver row of the transport twins: the point, the receiver's lobes and its direction
+/// across the plane of incidence (`ReceiverLobes::across`).
+#[derive(Clone, Copy, Debug)]
+pub struct ReceiverRow {
+    pub x: Vec3,
+    pub receiver: GpuReceiver,
+    pub across: Vec3,
+}
+
+fn transport_queries(rows: &[ReceiverRow], light: Vec3) -> Vec<TwinQuery> {
+    rows.iter()
+        .map(|r| TwinQuery {
+            a: [r.x.x, r.x.y, r.x.z, 0.0],
+            b: [r.across.x, r.across.y, r.across.z, 0.0],
+            c: [light.x, light.y, light.z, 0.0],
+            ..TwinQuery::default()
+        })
+        .collect()
+}
+
+/// The WGSL `lit_triangle_shade` (twin of `cut::LitTriangle::shade` with the default receiver
+/// options) of `leaves[i]` at `rows[i]`, on the GPU; RGB in the first three lanes.
+pub fn run_leaf_shade(
+    gpu: &Gpu,
+    leaves: &[GpuLeaf],
+    rows: &[ReceiverRow],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    if leaves.len() != rows.len() {
+        return Err(failed(format!(
+            "inconsistent sizes: {} leaves, {} rows",
+            leaves.len(),
+            rows.len()
+        )));
+    }
+    let receivers: Vec<GpuReceiver> = rows.iter().map(|r| r.receiver).collect();
+    let t = Transport {
+        leaves,
+        ..Transport::default()
+    };
+    let queries = transport_queries(rows, Vec3::ZERO);
+    dispatch(
+        gpu,
+        LEAF_SHADE,
+        &queries,
+        &[GpuNodeBound::default()],
+        &receivers,
+        &t,
+    )
+}
+
+/// The WGSL `lit_scene_cluster` (twin of `cut::LitScene::cluster`, lobes aimed from `light`)
+/// of `nodes[i]` at `rows[i]`, on the GPU; RGB in the first three lanes.
+pub fn run_cluster(
+    gpu: &Gpu,
+    nodes: &[GpuLitNode],
+    light: Vec3,
+    rows: &[ReceiverRow],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    if nodes.len() != rows.len() {
+        return Err(failed(format!(
+            "inconsistent sizes: {} nodes, {} rows",
+            nodes.len(),
+            rows.len()
+        )));
+    }
+    let receivers: Vec<GpuReceiver> = rows.iter().map(|r| r.receiver).collect();
+    let t = Transport {
+        nodes,
+        ..Transport::default()
+    };
+    let queries = transport_queries(rows, light);
+    dispatch(
+        gpu,
+        CLUSTER,
+        &queries,
+        &[GpuNodeBound::default()],
+        &receivers,
+        &t,
+    )
 }
 
 /// Index of `node_bound` in `shaders/math_twins.wgsl` (it takes a node and a receiver per row,
@@ -123,7 +234,14 @@ pub fn run_node_bound(
             ..TwinQuery::default()
         })
         .collect();
-    dispatch(gpu, NODE_BOUND, &queries, nodes, receivers)
+    dispatch(
+        gpu,
+        NODE_BOUND,
+        &queries,
+        nodes,
+        receivers,
+        &Transport::default(),
+    )
 }
 
 fn dispatch(
@@ -132,6 +250,7 @@ fn dispatch(
     queries: &[TwinQuery],
     nodes: &[GpuNodeBound],
     receivers: &[GpuReceiver],
+    transport: &Transport,
 ) -> Result<Vec<[f32; 4]>, GpuError> {
     if queries.is_empty() {
         return Ok(Vec::new());
@@ -187,9 +306,39 @@ fn dispatch(
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
+    let one_leaf = [GpuLeaf::default()];
+    let one_node = [GpuLitNode::default()];
+    let leaves = if transport.leaves.is_empty() {
+        &one_leaf[..]
+    } else {
+        transport.leaves
+    };
+    let lit_nodes = if transport.nodes.is_empty() {
+        &one_node[..]
+    } else {
+        transport.nodes
+    };
+    let leaf_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("twin leaves"),
+        contents: bytemuck::cast_slice(leaves),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let lit_node_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("twin lit nodes"),
+        contents: bytemuck::cast_slice(lit_nodes),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
     let bind = gpu.bind_buffers(
         &pipeline.get_bind_group_layout(0),
-        &[&params_buf, &query_buf, &out, &node_buf, &receiver_buf],
+        &[
+            &params_buf,
+            &query_buf,
+            &out,
+            &node_buf,
+            &receiver_buf,
+            &leaf_buf,
+            &lit_node_buf,
+        ],
     );
     let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
     {

@@ -1,0 +1,95 @@
+// Per-pixel SG shading over the cut (`render::gpu::sg_shade`), first of two passes: one
+// invocation per (pixel sample, cut node) pair computes that node's one-bounce radiance at the
+// sample — a leaf's exact SG transport over the triangle's solid angle, an inner node's
+// clustered approximation clamped to its error bound — times the node's visibility from its map
+// at a tree node; `sg_shade_sum` then adds up each sample's pairs. One invocation per pair
+// rather than per sample because lavapipe ends every loop of an invocation once all its loops
+// together have run 65,535 iterations (llvmpipe's LP_MAX_TGSI_LOOP_ITERATIONS; docs/gpu.md),
+// and one leaf takes about a thousand. Rust twin: the shading stage of `render::cpu::sg` with
+// `--visibility approx` and `--cut vertex` (`LitScene::evaluate`, `LitTriangle::shade`,
+// `LitScene::cluster`, `NodeMaps::visibility`); the transport functions are in
+// shaders/shared/transport.wgsl. Prepended with shaders/shared/*.wgsl.
+
+@group(0) @binding(0) var<uniform> params: GpuShadeParams;
+@group(0) @binding(1) var<storage, read> points: array<GpuShadePoint>;
+@group(0) @binding(2) var<storage, read> cut_nodes: array<u32>;
+@group(0) @binding(3) var<storage, read> nodes: array<GpuLitNode>;
+@group(0) @binding(4) var<storage, read> leaves: array<GpuLeaf>;
+@group(0) @binding(5) var<storage, read> map_origins: array<GpuMapOrigin>;
+@group(0) @binding(6) var<storage, read> atlas: array<vec2<f32>>;
+@group(0) @binding(7) var<storage, read_write> pair_values: array<vec4<f32>>;
+
+// `visibility::vsm::bilinear_moments` over map `m` of the atlas.
+fn bilinear_moments(m: u32, u: f32, v: f32) -> vec2<f32> {
+    let n = params.map_res;
+    let base = m * n * n;
+    let top = f32(n - 1u);
+    let x = clamp((u + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
+    let y = clamp((v + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
+    let x0 = u32(floor(x));
+    let y0 = u32(floor(y));
+    let x1 = min(x0 + 1u, n - 1u);
+    let y1 = min(y0 + 1u, n - 1u);
+    let fx = x - f32(x0);
+    let fy = y - f32(y0);
+    let r0 = atlas[base + y0 * n + x0] * (1.0 - fx) + atlas[base + y0 * n + x1] * fx;
+    let r1 = atlas[base + y1 * n + x0] * (1.0 - fx) + atlas[base + y1 * n + x1] * fx;
+    return r0 * (1.0 - fy) + r1 * fy;
+}
+
+// `NodeMaps::visibility`: the Chebyshev bound of map `m` (paraboloid about its origin's normal)
+// at p; 1 where the map knows nothing (no map, p below its horizon, no depth there).
+fn node_maps_visibility(m: u32, p: vec3<f32>) -> f32 {
+    if (m == NONE) {
+        return 1.0;
+    }
+    let o = map_origins[m];
+    let v = p - o.position;
+    let z = length(v);
+    if (!(z > 0.0)) {
+        return 1.0;
+    }
+    let w = v / z;
+    let d = vec3<f32>(dot(w, o.t), dot(w, o.b), dot(w, o.n));
+    if (!(d.z > 0.0)) {
+        return 1.0;
+    }
+    let mo = bilinear_moments(m, d.x / (1.0 + d.z), d.y / (1.0 + d.z));
+    if (!(mo.x > 0.0)) {
+        return 1.0;
+    }
+    return chebyshev_upper_bound(mo, z * (1.0 - params.map_bias), o.min_variance);
+}
+
+@compute @workgroup_size(64)
+fn sg_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= params.count) {
+        return;
+    }
+    let pair = params.first + gid.x;
+    // The point whose pairs hold this one: the last with pair_start ≤ pair (a point without
+    // pairs shares its pair_start with the next).
+    var lo = params.point_first;
+    var hi = params.point_end;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (points[mid].pair_start <= pair) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let pt = points[lo];
+    let node = nodes[cut_nodes[pt.cut_start + (pair - pt.pair_start)]];
+    var value = vec3<f32>(0.0);
+    if (node.leaf != NONE) {
+        value = lit_triangle_shade(leaves[node.leaf], pt.x, pt.receiver, pt.across);
+    } else if (node.weight > 0.0) {
+        let bound = node_bound(node.bound, pt.x, pt.receiver);
+        value = min(lit_scene_cluster(node, params.light_pos, pt.x, pt.receiver, pt.across), bound);
+    }
+    if (any(value != vec3<f32>(0.0))) {
+        value *= node_maps_visibility(node.map, pt.xo);
+    }
+    pair_values[gid.x] = vec4<f32>(value, 0.0);
+}
