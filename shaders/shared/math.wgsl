@@ -222,21 +222,31 @@ fn gl_t_of(f: EdgeFrame, p: f32) -> f32 {
 
 fn gl_monotone(f: EdgeFrame, pa: f32, pb: f32) -> f32 {
     var total = 0.0;
-    if (pa < HALF_PI) {
-        var tb = 1.0;
-        if (pb < HALF_PI) {
-            tb = gl_t_of(f, pb);
+    // The near half (ψ < π/2) and the far half, in a loop: one call site of gl_side (see
+    // integrate_sg).
+    for (var half = 0u; half < 2u; half = half + 1u) {
+        let far = half == 1u;
+        var run = false;
+        var t0 = 1.0;
+        var t1 = 1.0;
+        if (!far && pa < HALF_PI) {
+            run = true;
+            t0 = gl_t_of(f, pa);
+            if (pb < HALF_PI) {
+                t1 = gl_t_of(f, pb);
+            }
+        } else if (far && pb > HALF_PI) {
+            run = true;
+            let pf = max(pa, HALF_PI);
+            total += edge_h(f, 2.0) * (pb - pf);
+            if (pa > HALF_PI) {
+                t0 = gl_t_of(f, pa);
+            }
+            t1 = gl_t_of(f, pb);
         }
-        total += gl_side(f, gl_t_of(f, pa), tb, false);
-    }
-    if (pb > HALF_PI) {
-        let pf = max(pa, HALF_PI);
-        total += edge_h(f, 2.0) * (pb - pf);
-        var ta = 1.0;
-        if (pa > HALF_PI) {
-            ta = gl_t_of(f, pa);
+        if (run) {
+            total += gl_side(f, t0, t1, far);
         }
-        total += gl_side(f, ta, gl_t_of(f, pb), true);
     }
     return total;
 }
@@ -304,11 +314,17 @@ fn edge_integral(p: vec3<f32>, lam: f32, x: vec3<f32>, y: vec3<f32>) -> EdgeResu
     let mid = j * PI;
     var xmin = 3.0e38;
     var total = 0.0;
-    if (mid > lo && mid < hi) {
-        total += edge_monotone(f, lo, mid, &xmin);
-        total += edge_monotone(f, mid, hi, &xmin);
-    } else {
-        total += edge_monotone(f, lo, hi, &xmin);
+    // [lo, mid] and [mid, hi], or [lo, hi]: one call site (see integrate_sg).
+    let split = mid > lo && mid < hi;
+    for (var k = 0u; k < select(1u, 2u, split); k = k + 1u) {
+        var start = lo;
+        var end = hi;
+        if (split && k == 0u) {
+            end = mid;
+        } else if (split) {
+            start = mid;
+        }
+        total += edge_monotone(f, start, end, &xmin);
     }
     return EdgeResult(sign(dpsi) * total, dpsi, xmin);
 }
@@ -344,14 +360,17 @@ fn integrate_sg(axis: vec3<f32>, sharpness: f32, a_in: vec3<f32>, b_in: vec3<f32
         c = t;
     }
     var xmin = min(0.5 * dot(a - p, a - p), min(0.5 * dot(b - p, b - p), 0.5 * dot(c - p, c - p)));
+    // The three edges in a loop: one call site, since lavapipe inlines every call and its cost
+    // per invocation grows with the code (docs/gpu.md).
     var sum = 0.0;
     var wind = 0.0;
-    let e0 = edge_integral(p, lam, a, b);
-    let e1 = edge_integral(p, lam, b, c);
-    let e2 = edge_integral(p, lam, c, a);
-    sum = e0.integral + e1.integral + e2.integral;
-    wind = e0.dpsi + e1.dpsi + e2.dpsi;
-    xmin = min(xmin, min(e0.xmin, min(e1.xmin, e2.xmin)));
+    var verts = array<vec3<f32>, 3>(a, b, c);
+    for (var e = 0u; e < 3u; e = e + 1u) {
+        let r = edge_integral(p, lam, verts[e], verts[(e + 1u) % 3u]);
+        sum += r.integral;
+        wind += r.dpsi;
+        xmin = min(xmin, r.xmin);
+    }
     let lobe = lobe_integral(lam);
     let w = wind / TAU;
     var frac = -w;
