@@ -179,8 +179,8 @@ fn gl_side(f: EdgeFrame, t_start: f32, t_end: f32, far: bool) -> f32 {
     let dir = select(1.0, -1.0, far);
     var total = 0.0;
     var t = t_start;
-    // The last piece ends at t_end: no return from inside the loop (see docs/gpu.md, "Early
-    // returns in loops").
+    // The last piece ends at t_end, with the same call of gl_piece as the others: one call site
+    // (see integrate_sg).
     var ended = false;
     for (var i = 0u; i < 5u; i = i + 1u) {
         let y = y_start + offsets[i];
