@@ -359,10 +359,10 @@ pub fn render_sg(
             .all(|v| matches!(v, Some(ApproxVisibility::Nodes(_))));
     let gpu_indirect = match vertex_cuts.as_ref() {
         Some(vc) if gpu_ready => match ctx.gpu_indirect(&hits, vc, &tally, progress.cancel) {
-            Ok(Some((values, adapter, uploads))) => {
+            Ok(Some((shaded, adapter))) => {
                 stats.shading_on = format!("gpu ({adapter})");
-                stats.gpu_uploads = uploads;
-                Some(values)
+                stats.gpu_uploads = shaded.uploads;
+                Some(shaded.radiance)
             }
             Ok(None) => return None,
             Err(e) => {
@@ -889,23 +889,16 @@ impl Ctx<'_> {
     }
 
     /// The indirect light of every pixel sample over the vertex cuts `cuts`, shaded on the GPU
-    /// (`render::gpu::sg_shade`) with the maps at tree nodes; with the adapter's name and what
-    /// was uploaded per light. `Ok(None)` when cancelled.
-    #[allow(clippy::type_complexity)]
+    /// (`render::gpu::sg_shade`) with the maps at tree nodes (`radiance` per sample), with the
+    /// adapter's name. `Ok(None)` when cancelled.
     fn gpu_indirect(
         &self,
         hits: &[Option<Hit>],
         cuts: &VertexCuts,
         tally: &Tally,
         cancel: &std::sync::atomic::AtomicBool,
-    ) -> Result<
-        Option<(
-            Vec<Vec3>,
-            String,
-            Vec<crate::render::gpu::sg_shade::ShadeUpload>,
-        )>,
-        crate::render::gpu::GpuError,
-    > {
+    ) -> Result<Option<(crate::render::gpu::sg_shade::Shaded, String)>, crate::render::gpu::GpuError>
+    {
         use crate::render::gpu::sg_shade::{self, LightCuts, ShadePoint};
         let gpu = crate::render::gpu::Gpu::new()?;
         let found: Vec<Option<ShadePoint>> = hits
@@ -970,7 +963,7 @@ impl Ctx<'_> {
                 .fetch_add(points.len() as u64, Ordering::Relaxed);
             tally.add_counters(&CutCounters { evaluated, leaves });
         }
-        let per_sample = index
+        let radiance = index
             .iter()
             .map(|&i| {
                 if i == u32::MAX {
@@ -980,7 +973,10 @@ impl Ctx<'_> {
                 }
             })
             .collect();
-        Ok(Some((per_sample, gpu.adapter.clone(), uploads)))
+        Ok(Some((
+            sg_shade::Shaded { radiance, uploads },
+            gpu.adapter.clone(),
+        )))
     }
 
     /// Selects a cut at every receiver vertex that some sample's nearest vertex is.

@@ -153,25 +153,16 @@ pub fn run_leaf_shade(
     leaves: &[GpuLeaf],
     rows: &[ReceiverRow],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    if leaves.len() != rows.len() {
-        return Err(failed(format!(
-            "inconsistent sizes: {} leaves, {} rows",
-            leaves.len(),
-            rows.len()
-        )));
-    }
-    let receivers: Vec<GpuReceiver> = rows.iter().map(|r| r.receiver).collect();
     let t = Transport {
         leaves,
         ..Transport::default()
     };
-    let queries = transport_queries(rows, Vec3::ZERO);
-    dispatch(
+    run_transport(
         gpu,
         LEAF_SHADE,
-        &queries,
-        &[GpuNodeBound::default()],
-        &receivers,
+        ("leaves", leaves.len()),
+        rows,
+        Vec3::ZERO,
         &t,
     )
 }
@@ -184,26 +175,37 @@ pub fn run_cluster(
     light: Vec3,
     rows: &[ReceiverRow],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    if nodes.len() != rows.len() {
-        return Err(failed(format!(
-            "inconsistent sizes: {} nodes, {} rows",
-            nodes.len(),
-            rows.len()
-        )));
-    }
-    let receivers: Vec<GpuReceiver> = rows.iter().map(|r| r.receiver).collect();
     let t = Transport {
         nodes,
         ..Transport::default()
     };
+    run_transport(gpu, CLUSTER, ("nodes", nodes.len()), rows, light, &t)
+}
+
+/// A transport twin (`function`) over `rows`, one of `items` (name, count) per row.
+fn run_transport(
+    gpu: &Gpu,
+    function: u32,
+    (what, items): (&str, usize),
+    rows: &[ReceiverRow],
+    light: Vec3,
+    t: &Transport,
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    if items != rows.len() {
+        return Err(failed(format!(
+            "inconsistent sizes: {items} {what}, {} rows",
+            rows.len()
+        )));
+    }
+    let receivers: Vec<GpuReceiver> = rows.iter().map(|r| r.receiver).collect();
     let queries = transport_queries(rows, light);
     dispatch(
         gpu,
-        CLUSTER,
+        function,
         &queries,
         &[GpuNodeBound::default()],
         &receivers,
-        &t,
+        t,
     )
 }
 
