@@ -47,6 +47,10 @@ fn math_twins(@builtin(global_invocation_id) gid: vec3<u32>) {
         case 9u: {
             r.x = cosine_weighted(GpuSg(q.a.xyz, q.a.w, vec3<f32>(1.0), 0.0), vec3<f32>(q.b.w, q.c.w, q.d.w), q.b.xyz, q.c.xyz, q.d.xyz);
         }
+        case 10u: {
+            let m = GpuBrdf(q.c.xyz, u32(q.a.w), q.d.xyz, q.b.w, u32(q.c.w), 0u, 0u, 0u);
+            r = vec4<f32>(brdf_eval(m, q.a.xyz, q.b.xyz), 0.0);
+        }
         case 7u: {
             r = vec4<f32>(lit_triangle_shade(leaves[i], q.a.xyz, receivers[i], q.b.xyz), 0.0);
         }

@@ -4,11 +4,13 @@
 
 mod common;
 
+use glam::Vec3;
+use interreflect::brdf::{Brdf, Distribution};
 use interreflect::math::sampling::Rng;
 use interreflect::math::sg::lobe_integral;
 use interreflect::math::spherical_triangle::benchmark_inputs;
 use interreflect::render::gpu::layout::TwinQuery;
-use interreflect::render::gpu::twins::{Twin, cpu, run};
+use interreflect::render::gpu::twins::{Twin, brdf_row, cpu, run};
 
 fn unit(rng: &mut Rng) -> [f32; 3] {
     loop {
@@ -178,6 +180,78 @@ fn table(t: Twin) -> Vec<TwinQuery> {
                 out.push(r);
             }
         }
+        Twin::BrdfEval => {
+            // Every model with random colours (diffuse + specular ≤ 1) and parameters from
+            // rough to near-mirror; half the rows near the specular peak (wi the mirror of wo,
+            // perturbed by a few lobe widths), a tenth with wi or wo below the horizon.
+            let upper = |rng: &mut Rng| {
+                let v = unit(rng);
+                [v[0], v[1], v[2].abs().max(1e-4)]
+            };
+            for i in 0..3000 {
+                let model = i % 6;
+                let kd: [f32; 3] = [rng.f32(), rng.f32(), rng.f32()];
+                let ks: [f32; 3] = [0, 1, 2].map(|k| (1.0 - kd[k]) * rng.f32());
+                let (diffuse, specular) = (Vec3::from(kd), Vec3::from(ks));
+                let exponent = if i % 50 == 1 {
+                    0.0
+                } else {
+                    log_uniform(&mut rng, 0.0, 6.0)
+                };
+                let roughness = log_uniform(&mut rng, -3.0, 0.0);
+                let brdf = match model {
+                    0 => Brdf::Lambert { diffuse },
+                    1 => Brdf::Phong {
+                        diffuse,
+                        specular,
+                        exponent,
+                    },
+                    2 => Brdf::BlinnPhong {
+                        diffuse,
+                        specular,
+                        exponent,
+                    },
+                    3 => Brdf::Ward {
+                        diffuse,
+                        specular,
+                        roughness,
+                    },
+                    m => Brdf::CookTorrance {
+                        diffuse,
+                        specular,
+                        roughness,
+                        distribution: if m == 4 {
+                            Distribution::Beckmann
+                        } else {
+                            Distribution::Ggx
+                        },
+                    },
+                };
+                let wo = Vec3::from(upper(&mut rng));
+                let mut wi = if i % 2 == 0 {
+                    // Within a few lobe widths of the mirror direction.
+                    let width = match model {
+                        1 | 2 => 3.0 / (exponent + 1.0).sqrt(),
+                        _ => 3.0 * roughness,
+                    };
+                    let r = Vec3::new(-wo.x, -wo.y, wo.z);
+                    let j = Vec3::from(unit(&mut rng)) * (width * rng.f32());
+                    let w = (r + j).normalize();
+                    Vec3::new(w.x, w.y, w.z.abs().max(1e-4)).normalize()
+                } else {
+                    Vec3::from(upper(&mut rng))
+                };
+                if i % 10 == 3 {
+                    wi.z = -wi.z;
+                }
+                let wo = if i % 10 == 7 {
+                    Vec3::new(wo.x, wo.y, -wo.z)
+                } else {
+                    wo
+                };
+                out.push(brdf_row(&brdf, wo, wi));
+            }
+        }
     }
     out
 }
@@ -209,6 +283,13 @@ fn tolerance(t: Twin, q: &TwinQuery) -> (f32, f32) {
         // at most 1.4e-4 of the lobe's integral on these rows (half of them with the lobe
         // within ±0.15 of the horizon); allowed as for the integral.
         Twin::CosineWeighted => (1e-3, 3e-4 * lobe_integral(q.a[3])),
+        // f32 against the Rust twin's f64 half vector and 1 − a·b. Near a sharp peak the
+        // exponent n (1 − cos θh) reaches tens for exponents up to 1e6 (α down to 1e-3), and
+        // the f32 rounding of the inputs' tangent components (~1e-7 absolute) moves 1 − cos θh
+        // by ~1e-5 relative: measured at most 3.7e-4 relative on these rows. Allowed 2e-3
+        // relative; values below 1e-6 (1/sr, far outside a lobe) are zero on one side or the
+        // other.
+        Twin::BrdfEval => (2e-3, 1e-6),
     }
 }
 

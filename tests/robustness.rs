@@ -385,6 +385,7 @@ fn vpl_is_finite() {
                 indirect: true,
                 visibility: vis,
                 device: interreflect::render::Device::Cpu,
+                cpu_sum: false,
                 vpl_count: 64,
                 clamp_distance,
             };

@@ -64,6 +64,7 @@ fn vpl(scene: &Scene, accel: &Accel, count: u32, clamp_distance: f32, seed: u64)
         indirect: true,
         visibility: Visibility::Exact,
         device: interreflect::render::Device::Cpu,
+        cpu_sum: false,
         vpl_count: count,
         clamp_distance,
     };

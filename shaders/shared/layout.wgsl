@@ -183,3 +183,72 @@ struct GpuMapOrigin {
     n: vec3<f32>,
     _pad2: f32,
 }
+
+// A material (`brdf::Brdf`; the encoding is in shared/brdf.wgsl).
+struct GpuBrdf {
+    diffuse: vec3<f32>,
+    model: u32,
+    specular: vec3<f32>,
+    param: f32,
+    distribution: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// The VPL pass's uniform (`render::gpu::vpl`).
+struct GpuVplParams {
+    count: u32,
+    vpl_count: u32,
+    accumulate: u32,
+    clamp2: f32,
+    map_res: u32,
+    map_bias: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// A pixel sample on a receiver for the VPL pass: point, normals, frame, eye direction.
+struct GpuVplPoint {
+    p: vec3<f32>,
+    material: u32,
+    ng: vec3<f32>,
+    _pad0: f32,
+    t: vec3<f32>,
+    _pad1: f32,
+    b: vec3<f32>,
+    _pad2: f32,
+    n: vec3<f32>,
+    _pad3: f32,
+    wo: vec3<f32>,
+    _pad4: f32,
+}
+
+// A VPL with its shading frame, light direction (local), material and imperfect shadow map.
+struct GpuVpl {
+    position: vec3<f32>,
+    material: u32,
+    normal: vec3<f32>,
+    map: u32,
+    t: vec3<f32>,
+    _pad0: f32,
+    b: vec3<f32>,
+    _pad1: f32,
+    n: vec3<f32>,
+    _pad2: f32,
+    wi: vec3<f32>,
+    _pad3: f32,
+    power: vec3<f32>,
+    _pad4: f32,
+    origin: GpuMapOrigin,
+}
+
+// The VPL pass's per-point sums: radiance and the pair counts.
+struct GpuVplSum {
+    radiance: vec3<f32>,
+    pairs: u32,
+    clamped: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}

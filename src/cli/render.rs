@@ -484,6 +484,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         (img, None, None, Some(prt_log), None, 0)
     } else if args.method == Method::Vpl {
         shadow_map_device_check(&args)?;
+        if args.device == Device::Gpu && args.visibility != Visibility::Approx {
+            eprintln!(
+                "notice: vpl sums its VPLs on the GPU only with --visibility approx (the other visibilities cast shadow rays); summing on the CPU"
+            );
+        }
         let opts = VplOptions {
             width,
             height,
@@ -495,6 +500,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             vpl_count,
             clamp_distance,
             device: args.device,
+            cpu_sum: false,
         };
         let result = progress::run(height as u64, args.quiet, |prog| {
             pool.install(|| render_vpl(&scene, &accel, &opts, prog))
@@ -503,6 +509,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             return Ok(interrupted());
         };
         shadow_map_fallback(&args, &stats.shadow_maps_on)?;
+        gpu_shading_fallback(&args, &stats.indirect_on)?;
         log(format!(
             "vpl: {} VPLs, clamp distance {:.4} ({} of {} pairs clamped), {} visibility rays",
             stats.vpls,
@@ -515,6 +522,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             "vpl stages: shadow maps {:.2} s, VPLs {:.2} s, imperfect shadow maps {:.2} s, shading {:.2} s",
             stats.seconds.shadow_maps, stats.seconds.vpls, stats.seconds.ism, stats.seconds.shading
         ));
+        if let Some(adapter) = stats.indirect_on.strip_prefix("gpu ") {
+            log(format!(
+                "vpl one-bounce sum on the GPU {adapter}: {:.2} s (primary hits included)",
+                stats.seconds.gpu_shading
+            ));
+        }
         let nonfinite = stats.nonfinite_samples;
         (
             img,
@@ -824,8 +837,8 @@ fn shadow_map_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
     )
 }
 
-/// Where sg's indirect light was shaded ("cpu (why)" when the GPU was asked for and failed):
-/// an error with `--device gpu`.
+/// Where sg's or vpl's indirect light was shaded ("cpu (why)" when the GPU was asked for and
+/// not used): an error with `--device gpu`, a notice with `--device auto`.
 fn gpu_shading_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
     gpu_fallback(
         args,

@@ -276,8 +276,14 @@ impl Scene {
     /// Material of triangle `t`.
     #[inline]
     pub fn tri_material(&self, t: u32) -> &Brdf {
+        &self.materials[self.tri_material_index(t) as usize].brdf
+    }
+
+    /// Index into `materials` of triangle `t`'s material.
+    #[inline]
+    pub fn tri_material_index(&self, t: u32) -> u32 {
         let o = self.mesh.tri_object[t as usize] as usize;
-        &self.materials[self.objects[o].material as usize].brdf
+        self.objects[o].material
     }
 
     /// Object of triangle `t`.

@@ -17,6 +17,10 @@
 //! Visibility, like `sg`'s: `exact` — shadow rays for the light and between VPLs and receivers;
 //! `vsm` — the light's variance shadow maps, rays between VPLs and receivers; `approx` — the
 //! variance shadow maps and each VPL's imperfect shadow map.
+//!
+//! With `approx` and `--device gpu`, the one-bounce sum runs on the GPU (`render::gpu::vpl`);
+//! this module's loop is its twin. `auto` keeps it here: on lavapipe the CPU twin is faster
+//! (docs/gpu.md).
 
 use super::reference::Progress;
 use super::sg::{direct_light, light_fraction, sample_offset, shadow_maps};
@@ -28,6 +32,8 @@ use crate::math::{Frame, triangle_barycentrics};
 use crate::precompute::vpl::{self, Vpl};
 use crate::render::Device;
 use crate::render::Visibility;
+use crate::render::gpu::layout::{GpuVpl, GpuVplPoint};
+use crate::render::gpu::vpl::{MapAtlas, VplShaded};
 use crate::scene::Scene;
 use crate::visibility::ism::ImperfectShadowMaps;
 use crate::visibility::vsm::VarianceShadowMap;
@@ -51,8 +57,12 @@ pub struct VplOptions {
     pub vpl_count: u32,
     /// The geometry term's distance clamp d_c (scene units; 0 = no clamp).
     pub clamp_distance: f32,
-    /// Where the stages with a GPU pass run (so far: point lights' shadow maps).
+    /// Where the stages with a GPU pass run: point lights' shadow maps (`auto` or `gpu`) and,
+    /// with `gpu` and `approx` only, the one-bounce sum over the VPLs.
     pub device: Device,
+    /// Sum the VPLs on the CPU even with `device` gpu: the GPU pass's twin with the same
+    /// shadow maps (and so the same VPLs), for the tests.
+    pub cpu_sum: bool,
 }
 
 /// Seconds per stage.
@@ -64,6 +74,10 @@ pub struct VplTimes {
     pub vpls: f64,
     /// Imperfect shadow maps (`approx`).
     pub ism: f64,
+    /// The one-bounce sum on the GPU, with its uploads (`indirect_on` "gpu …"); 0 otherwise.
+    pub gpu_shading: f64,
+    /// The pixel loop: primary hits (unless the GPU pass cast them), direct light, and the
+    /// one-bounce sum when it runs on the CPU.
     pub shading: f64,
 }
 
@@ -74,6 +88,10 @@ pub struct VplStats {
     /// empty without shadow maps.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub shadow_maps_on: String,
+    /// Where the one-bounce sum ran: "cpu", "gpu (adapter)", or "cpu (why the GPU was not
+    /// used)"; empty without indirect light.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub indirect_on: String,
     /// VPLs of all lights.
     pub vpls: usize,
     pub clamp_distance: f32,
@@ -96,6 +114,8 @@ struct Emitter<'a> {
     /// Direction to the light in the VPL's frame.
     wi_local: Vec3,
     brdf: &'a Brdf,
+    /// Index of `brdf` among the scene's materials.
+    material: u32,
 }
 
 /// One light's VPLs and their visibility.
@@ -178,6 +198,7 @@ pub fn render_vpl(
                         frame: sp.frame,
                         wi_local,
                         brdf: scene.tri_material(v.tri),
+                        material: scene.tri_material_index(v.tri),
                     })
                 })
                 .collect::<Vec<_>>();
@@ -200,6 +221,41 @@ pub fn render_vpl(
         AtomicU64::new(0),
         AtomicU64::new(0),
     );
+
+    // The one-bounce sum on the GPU (primary hits cast first, for every sample).
+    let t = Instant::now();
+    let mut hits: Option<Vec<Option<Hit>>> = None;
+    let mut gpu_sums: Option<Vec<VplShaded>> = None;
+    if opts.indirect {
+        stats.indirect_on = "cpu".into();
+    }
+    if opts.indirect
+        && opts.visibility == Visibility::Approx
+        && opts.device == Device::Gpu
+        && !opts.cpu_sum
+    {
+        let all: Vec<Option<Hit>> = (0..opts.width as usize * opts.height as usize * spp as usize)
+            .into_par_iter()
+            .map(|i| {
+                let (pixel, s) = (i / spp as usize, (i % spp as usize) as u32);
+                let o = sample_offset(spp, s, opts.seed, pixel as u64);
+                let (x, y) = (pixel % w, pixel / w);
+                let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
+                accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
+            })
+            .collect();
+        match gpu_indirect(scene, &lights, &all, opts.clamp_distance, progress.cancel) {
+            Ok(Some((sums, adapter))) => {
+                stats.indirect_on = format!("gpu ({adapter})");
+                gpu_sums = Some(sums);
+            }
+            Ok(None) => return None,
+            Err(e) => stats.indirect_on = format!("cpu (the GPU failed: {e})"),
+        }
+        hits = Some(all);
+    }
+    stats.seconds.gpu_shading = t.elapsed().as_secs_f64();
+
     let t = Instant::now();
     let mut img = Image::new(opts.width, opts.height);
     img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -214,15 +270,25 @@ pub fn render_vpl(
             let pixel = (y * w + x) as u64;
             let mut sum = DVec3::ZERO;
             for s in 0..spp {
-                let o = sample_offset(spp, s, opts.seed, pixel);
-                let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
-                let hit = accel.intersect(camera.position, dir, 0.0, f32::INFINITY);
+                let i = pixel as usize * spp as usize + s as usize;
+                let hit = match &hits {
+                    Some(h) => h[i],
+                    None => {
+                        let o = sample_offset(spp, s, opts.seed, pixel);
+                        let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
+                        accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
+                    }
+                };
+                let indirect = match &gpu_sums {
+                    Some(g) => Indirect::Gpu(g[i]),
+                    None => Indirect::Cpu(&lights),
+                };
                 let v = shade(
                     scene,
                     accel,
                     opts,
                     &maps,
-                    &lights,
+                    indirect,
                     hit.as_ref(),
                     eps,
                     dc2,
@@ -252,6 +318,13 @@ pub fn render_vpl(
     Some((img, stats))
 }
 
+/// A sample's one-bounce light: summed here over the lights' VPLs, or already by the GPU.
+#[derive(Clone, Copy)]
+enum Indirect<'l, 'a> {
+    Cpu(&'l [LightVpls<'a>]),
+    Gpu(VplShaded),
+}
+
 /// Radiance of one pixel sample; `c` counts (pairs, clamped pairs, rays).
 #[allow(clippy::too_many_arguments)]
 fn shade(
@@ -259,7 +332,7 @@ fn shade(
     accel: &Accel,
     opts: &VplOptions,
     maps: &[Option<VarianceShadowMap>],
-    lights: &[LightVpls],
+    indirect: Indirect,
     hit: Option<&Hit>,
     eps: f32,
     dc2: f32,
@@ -281,6 +354,14 @@ fn shade(
     if !opts.indirect || !scene.tri_object(hit.tri).receiver {
         return l;
     }
+    let lights = match indirect {
+        Indirect::Cpu(lights) => lights,
+        Indirect::Gpu(g) => {
+            c[0] += u64::from(g.pairs);
+            c[1] += u64::from(g.clamped);
+            return l + g.radiance;
+        }
+    };
     let wo_l = sp.frame.to_local(wo);
     if !(wo_l.z > 0.0) {
         return l;
@@ -328,4 +409,93 @@ fn shade(
         }
     }
     l
+}
+
+/// The one-bounce sum of every sample (`hits`, sample-major within pixels) on the GPU, with
+/// the adapter's name; `None` when cancelled. The points are those `shade` sums at: receivers
+/// seen from their front.
+fn gpu_indirect(
+    scene: &Scene,
+    lights: &[LightVpls],
+    hits: &[Option<Hit>],
+    clamp_distance: f32,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<Option<(Vec<VplShaded>, String)>, crate::render::gpu::GpuError> {
+    let gpu = crate::render::gpu::Gpu::new()?;
+    let camera = scene.camera.position;
+    let found: Vec<Option<GpuVplPoint>> = hits
+        .par_iter()
+        .map(|h| {
+            let hit = h.as_ref()?;
+            if !scene.tri_object(hit.tri).receiver {
+                return None;
+            }
+            let wo = (camera - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+            let sp = SurfacePoint::from_hit(scene, hit, wo)?;
+            let wo_l = sp.frame.to_local(wo);
+            (wo_l.z > 0.0).then(|| {
+                GpuVplPoint::new(
+                    sp.p,
+                    sp.ng,
+                    &sp.frame,
+                    wo_l,
+                    scene.tri_material_index(hit.tri),
+                )
+            })
+        })
+        .collect();
+    let mut index = vec![u32::MAX; hits.len()];
+    let mut points = Vec::new();
+    for (i, p) in found.into_iter().enumerate() {
+        if let Some(p) = p {
+            index[i] = points.len() as u32;
+            points.push(p);
+        }
+    }
+    let mut atlas = MapAtlas::default();
+    let mut vpls = Vec::new();
+    for lv in lights {
+        let first = match &lv.ism {
+            Some(ism) => Some(atlas.push(ism)?),
+            None => None,
+        };
+        for e in &lv.emitters {
+            vpls.push(GpuVpl {
+                position: e.vpl.position.to_array(),
+                material: e.material,
+                normal: e.vpl.normal.to_array(),
+                map: first.map_or(u32::MAX, |f| f + e.index as u32),
+                t: e.frame.t.to_array(),
+                b: e.frame.b.to_array(),
+                n: e.frame.n.to_array(),
+                wi: e.wi_local.to_array(),
+                power: e.vpl.power.to_array(),
+                ..GpuVpl::default()
+            });
+        }
+    }
+    let materials: Vec<Brdf> = scene.materials.iter().map(|m| m.brdf).collect();
+    let Some(sums) = crate::render::gpu::vpl::shade(
+        &gpu,
+        &materials,
+        &points,
+        &vpls,
+        &atlas,
+        clamp_distance,
+        cancel,
+    )?
+    else {
+        return Ok(None);
+    };
+    let per_sample = index
+        .iter()
+        .map(|&i| {
+            if i == u32::MAX {
+                VplShaded::default()
+            } else {
+                sums[i as usize]
+            }
+        })
+        .collect();
+    Ok(Some((per_sample, gpu.adapter.clone())))
 }

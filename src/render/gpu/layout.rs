@@ -236,6 +236,137 @@ pub struct GpuMapOrigin {
     pub _pad2: f32,
 }
 
+/// A material (`brdf::Brdf`): `model` 0 Lambert, 1 Phong, 2 Blinn-Phong, 3 Ward, 4 Cook-Torrance
+/// (`distribution` 0 Beckmann, 1 GGX); `param` the exponent or α.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBrdf {
+    pub diffuse: [f32; 3],
+    pub model: u32,
+    pub specular: [f32; 3],
+    pub param: f32,
+    pub distribution: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+impl From<&crate::brdf::Brdf> for GpuBrdf {
+    fn from(b: &crate::brdf::Brdf) -> Self {
+        use crate::brdf::{Brdf, Distribution};
+        let (model, diffuse, specular, param, distribution) = match *b {
+            Brdf::Lambert { diffuse } => (0, diffuse, glam::Vec3::ZERO, 0.0, 0),
+            Brdf::Phong {
+                diffuse,
+                specular,
+                exponent,
+            } => (1, diffuse, specular, exponent, 0),
+            Brdf::BlinnPhong {
+                diffuse,
+                specular,
+                exponent,
+            } => (2, diffuse, specular, exponent, 0),
+            Brdf::Ward {
+                diffuse,
+                specular,
+                roughness,
+            } => (3, diffuse, specular, roughness, 0),
+            Brdf::CookTorrance {
+                diffuse,
+                specular,
+                roughness,
+                distribution,
+            } => (
+                4,
+                diffuse,
+                specular,
+                roughness,
+                u32::from(distribution == Distribution::Ggx),
+            ),
+        };
+        GpuBrdf {
+            diffuse: diffuse.to_array(),
+            model,
+            specular: specular.to_array(),
+            param,
+            distribution,
+            ..GpuBrdf::default()
+        }
+    }
+}
+
+/// The VPL pass's uniform (`super::vpl`): the points of this dispatch, the VPLs of this chunk,
+/// the geometry term's clamp and the imperfect shadow maps' resolution and bias.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVplParams {
+    pub count: u32,
+    pub vpl_count: u32,
+    /// 0 for the first chunk of VPLs (the sums start from zero), 1 after.
+    pub accumulate: u32,
+    /// d_c², the geometry term's clamp.
+    pub clamp2: f32,
+    pub map_res: u32,
+    pub map_bias: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// A pixel sample on a receiver for the VPL pass: its point, geometric normal, shading frame,
+/// the direction to the eye in that frame and its material.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVplPoint {
+    pub p: [f32; 3],
+    pub material: u32,
+    pub ng: [f32; 3],
+    pub _pad0: f32,
+    pub t: [f32; 3],
+    pub _pad1: f32,
+    pub b: [f32; 3],
+    pub _pad2: f32,
+    pub n: [f32; 3],
+    pub _pad3: f32,
+    pub wo: [f32; 3],
+    pub _pad4: f32,
+}
+
+/// A VPL (`precompute::vpl::Vpl`) with its shading frame, the direction to its light in that
+/// frame, its material and its imperfect shadow map (`map`, `u32::MAX` for none, and the map's
+/// origin).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVpl {
+    pub position: [f32; 3],
+    pub material: u32,
+    pub normal: [f32; 3],
+    pub map: u32,
+    pub t: [f32; 3],
+    pub _pad0: f32,
+    pub b: [f32; 3],
+    pub _pad1: f32,
+    pub n: [f32; 3],
+    pub _pad2: f32,
+    pub wi: [f32; 3],
+    pub _pad3: f32,
+    pub power: [f32; 3],
+    pub _pad4: f32,
+    /// The origin of its imperfect shadow map (filled in by `super::vpl::shade`).
+    pub origin: GpuMapOrigin,
+}
+
+/// What the VPL pass sums per point: the radiance and the pair counts of `VplStats`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVplSum {
+    pub radiance: [f32; 3],
+    pub pairs: u32,
+    pub clamped: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructLayout {
@@ -392,6 +523,65 @@ pub fn layouts() -> Vec<StructLayout> {
             b,
             _pad1,
             n,
+            _pad2
+        }),
+        layout!(GpuBrdf {
+            diffuse,
+            model,
+            specular,
+            param,
+            distribution,
+            _pad0,
+            _pad1,
+            _pad2
+        }),
+        layout!(GpuVplParams {
+            count,
+            vpl_count,
+            accumulate,
+            clamp2,
+            map_res,
+            map_bias,
+            _pad0,
+            _pad1
+        }),
+        layout!(GpuVplPoint {
+            p,
+            material,
+            ng,
+            _pad0,
+            t,
+            _pad1,
+            b,
+            _pad2,
+            n,
+            _pad3,
+            wo,
+            _pad4
+        }),
+        layout!(GpuVpl {
+            position,
+            material,
+            normal,
+            map,
+            t,
+            _pad0,
+            b,
+            _pad1,
+            n,
+            _pad2,
+            wi,
+            _pad3,
+            power,
+            _pad4,
+            origin
+        }),
+        layout!(GpuVplSum {
+            radiance,
+            pairs,
+            clamped,
+            _pad0,
+            _pad1,
             _pad2
         }),
     ]

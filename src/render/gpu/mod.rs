@@ -15,6 +15,7 @@ pub mod sg_shade;
 pub mod shaders;
 pub mod tonemap;
 pub mod twins;
+pub mod vpl;
 pub mod vsm;
 
 use std::sync::{Arc, Mutex};

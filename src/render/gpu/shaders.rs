@@ -3,7 +3,7 @@
 //! WGSL has no includes; this concatenation is the only way a pass gets the shared code.
 
 /// The shared files, in the order they are prepended.
-pub const SHARED: [(&str, &str); 3] = [
+pub const SHARED: [(&str, &str); 4] = [
     (
         "shared/layout.wgsl",
         include_str!("../../../shaders/shared/layout.wgsl"),
@@ -16,10 +16,14 @@ pub const SHARED: [(&str, &str); 3] = [
         "shared/transport.wgsl",
         include_str!("../../../shaders/shared/transport.wgsl"),
     ),
+    (
+        "shared/brdf.wgsl",
+        include_str!("../../../shaders/shared/brdf.wgsl"),
+    ),
 ];
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 8] = [
+pub const PASSES: [(&str, &str); 9] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -37,6 +41,7 @@ pub const PASSES: [(&str, &str); 8] = [
         "sg_shade_sum",
         include_str!("../../../shaders/sg_shade_sum.wgsl"),
     ),
+    ("vpl", include_str!("../../../shaders/vpl.wgsl")),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.

@@ -28,10 +28,13 @@ pub enum Twin {
     /// `transport::receiver::cosine_weighted`: the unit-amplitude lobe (a.xyz axis, a.w λ) times
     /// n·ω over the triangle (b.xyz, c.xyz, d.xyz), n = (b.w, c.w, d.w).
     CosineWeighted = 9,
+    /// `Brdf::eval(wo = a.xyz, wi = b.xyz)` of the material in [`brdf_row`]'s encoding: model
+    /// a.w, parameter b.w, diffuse c.xyz, distribution c.w, specular d.xyz.
+    BrdfEval = 10,
 }
 
 impl Twin {
-    pub const ALL: [Twin; 7] = [
+    pub const ALL: [Twin; 8] = [
         Twin::LobeIntegral,
         Twin::SgInnerProduct,
         Twin::ChebyshevUpperBound,
@@ -39,6 +42,7 @@ impl Twin {
         Twin::ClampedCosineMean,
         Twin::IntegrateSg,
         Twin::CosineWeighted,
+        Twin::BrdfEval,
     ];
 
     /// The WGSL function's name (the Rust twin's, a method `T::f` as `t_f`).
@@ -51,7 +55,58 @@ impl Twin {
             Twin::ClampedCosineMean => "clamped_cosine_mean",
             Twin::IntegrateSg => "integrate_sg",
             Twin::CosineWeighted => "cosine_weighted",
+            Twin::BrdfEval => "brdf_eval",
         }
+    }
+}
+
+/// A [`Twin::BrdfEval`] row: `brdf` evaluated at (wo, wi).
+pub fn brdf_row(brdf: &crate::brdf::Brdf, wo: Vec3, wi: Vec3) -> TwinQuery {
+    let g = super::layout::GpuBrdf::from(brdf);
+    TwinQuery {
+        a: [wo.x, wo.y, wo.z, g.model as f32],
+        b: [wi.x, wi.y, wi.z, g.param],
+        c: [
+            g.diffuse[0],
+            g.diffuse[1],
+            g.diffuse[2],
+            g.distribution as f32,
+        ],
+        d: [g.specular[0], g.specular[1], g.specular[2], 0.0],
+    }
+}
+
+/// The material of a [`brdf_row`].
+fn row_brdf(q: &TwinQuery) -> crate::brdf::Brdf {
+    use crate::brdf::{Brdf, Distribution};
+    let (diffuse, specular, p) = (v3(q.c), v3(q.d), q.b[3]);
+    match q.a[3] as u32 {
+        0 => Brdf::Lambert { diffuse },
+        1 => Brdf::Phong {
+            diffuse,
+            specular,
+            exponent: p,
+        },
+        2 => Brdf::BlinnPhong {
+            diffuse,
+            specular,
+            exponent: p,
+        },
+        3 => Brdf::Ward {
+            diffuse,
+            specular,
+            roughness: p,
+        },
+        _ => Brdf::CookTorrance {
+            diffuse,
+            specular,
+            roughness: p,
+            distribution: if q.c[3] == 1.0 {
+                Distribution::Ggx
+            } else {
+                Distribution::Beckmann
+            },
+        },
     }
 }
 
@@ -91,6 +146,10 @@ pub fn cpu(twin: Twin, q: &TwinQuery) -> [f32; 4] {
             v3(q.c),
             v3(q.d),
         )),
+        Twin::BrdfEval => {
+            let f = row_brdf(q).eval(v3(q.a), v3(q.b));
+            [f.x, f.y, f.z, 0.0]
+        }
     }
 }
 
