@@ -190,3 +190,30 @@ fn sg_shadow_maps_without_an_adapter_fail_clearly_or_fall_back() {
     let on = log["sg"]["shadow_maps_on"].as_str().unwrap_or_default();
     assert!(on.starts_with("cpu (no GPU"), "{on}");
 }
+
+/// Without an adapter, `--device gpu` with a method whose only GPU stage is the PNG's tonemap
+/// (`direct`) fails before rendering, names the stage and the fix, and writes nothing.
+#[test]
+fn tonemap_without_an_adapter_fails_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bunny.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
+        .args(["render", scene, "--method", "direct", "--device", "gpu"])
+        .args(["--width", "16", "--spp", "1", "--quiet", "--output"])
+        .arg(dir.path().join("direct.exr"))
+        .env("WGPU_BACKEND", "dx12")
+        .env("XDG_RUNTIME_DIR", dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(
+            "error: --device gpu: the PNG is tonemapped on the GPU: no GPU adapter found"
+        ),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--device cpu"), "{stderr}");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+}

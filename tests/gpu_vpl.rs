@@ -118,6 +118,9 @@ fn render_sums_the_vpls_on_the_gpu_when_asked_and_says_so() {
     let on = log["vpl"]["indirect_on"].as_str().unwrap_or_default();
     assert!(on.starts_with("gpu ("), "{}", log["vpl"]);
     assert!(log["vpl"]["pairs"].as_u64().unwrap() > 0);
+    // The PNG is tonemapped on the GPU too.
+    let tm = log["tonemap_on"].as_str().unwrap_or_default();
+    assert!(tm.starts_with("gpu ("), "{tm}");
 
     let (stderr, log) = run("vsm");
     let notices: Vec<&str> = stderr

@@ -5,7 +5,7 @@ use anyhow::{Context, bail};
 use interreflect::accel::Accel;
 use interreflect::cut::CutOptions;
 use interreflect::fsutil::same_file;
-use interreflect::image::{Tonemap, write_exr, write_png};
+use interreflect::image::{Tonemap, write_exr, write_png, write_png_rgb8};
 use interreflect::memory::{self, Budget, Workload};
 use interreflect::precompute::prt::{TransferKind, WindowKind};
 use interreflect::render::checks::camera_inside_geometry;
@@ -140,6 +140,8 @@ struct RenderLog<'a> {
     threads: usize,
     triangles: usize,
     tonemap: String,
+    /// Where the PNG's pixels were tonemapped: "cpu", or "gpu (adapter)" with `--device gpu`.
+    tonemap_on: String,
     seconds: Timings,
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     reference: Option<ReferenceLog>,
@@ -474,6 +476,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("warning: {}: {w}", scene.path.display());
     }
 
+    // --device gpu tonemaps the PNG on the GPU: without an adapter, fail before rendering
+    // (prt and the shadow maps check for themselves, with their own messages).
+    let checked_elsewhere = prt.is_some()
+        || ((is_sg || args.method == Method::Vpl) && args.visibility != Visibility::Exact);
+    if args.device == Device::Gpu && !checked_elsewhere {
+        interreflect::render::gpu::Gpu::new()
+            .map_err(|e| anyhow::anyhow!("--device gpu: the PNG is tonemapped on the GPU: {e}"))?;
+    }
     let t = Instant::now();
     let rendered = if let Some(prt) = &prt {
         let Some((img, prt_log)) =
@@ -697,7 +707,25 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         return Err(e.into());
     }
     written.push(&out);
-    if let Err(e) = write_png(&png, &img, &tm) {
+    // With --device gpu the tonemap pass encodes the PNG's pixels (`render::gpu::tonemap`;
+    // at most one 8-bit step from the CPU's, docs/gpu.md).
+    let mut tonemap_on = "cpu".to_string();
+    let written_png = if args.device == Device::Gpu {
+        let pixels = interreflect::render::gpu::Gpu::new().and_then(|gpu| {
+            tonemap_on = format!("gpu ({})", gpu.adapter);
+            interreflect::render::gpu::tonemap::to_srgb8(&gpu, &img, &tm)
+        });
+        match pixels {
+            Ok(p) => write_png_rgb8(&png, img.width, img.height, &p),
+            Err(e) => {
+                remove_written(&written);
+                anyhow::bail!("--device gpu: the PNG could not be tonemapped on the GPU: {e}");
+            }
+        }
+    } else {
+        write_png(&png, &img, &tm)
+    };
+    if let Err(e) = written_png {
         remove_written(&written);
         return Err(e.into());
     }
@@ -716,6 +744,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         threads,
         triangles: scene.mesh.indices.len(),
         tonemap: tm.describe(),
+        tonemap_on,
         seconds: times,
         reference: reference_log,
         sg: sg_log,
