@@ -23,18 +23,8 @@
 fn bilinear_moments(m: u32, u: f32, v: f32) -> vec2<f32> {
     let n = params.map_res;
     let base = m * n * n;
-    let top = f32(n - 1u);
-    let x = clamp((u + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
-    let y = clamp((v + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
-    let x0 = u32(floor(x));
-    let y0 = u32(floor(y));
-    let x1 = min(x0 + 1u, n - 1u);
-    let y1 = min(y0 + 1u, n - 1u);
-    let fx = x - f32(x0);
-    let fy = y - f32(y0);
-    let r0 = atlas[base + y0 * n + x0] * (1.0 - fx) + atlas[base + y0 * n + x1] * fx;
-    let r1 = atlas[base + y1 * n + x0] * (1.0 - fx) + atlas[base + y1 * n + x1] * fx;
-    return r0 * (1.0 - fy) + r1 * fy;
+    let b = bilinear_texels(n, u, v);
+    return bilinear_mix(b, atlas[base + b.i00], atlas[base + b.i10], atlas[base + b.i01], atlas[base + b.i11]);
 }
 
 // `NodeMaps::visibility`: the Chebyshev bound of map `m` (paraboloid about its origin's normal)

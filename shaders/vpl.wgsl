@@ -8,7 +8,7 @@
 // `--visibility approx`. Prepended with shaders/shared/*.wgsl.
 
 @group(0) @binding(0) var<uniform> params: GpuVplParams;
-@group(0) @binding(1) var<storage, read> points: array<GpuVplPoint>;
+@group(0) @binding(1) var<storage, read> points: array<GpuSurfacePoint>;
 // This dispatch's chunk of VPLs (a uniform buffer: every invocation reads the same VPL at the
 // same time, which lavapipe serves as one load rather than a gather per invocation).
 @group(0) @binding(2) var<uniform> vpls: array<GpuVpl, 256>;
@@ -20,18 +20,8 @@
 fn bilinear_moments(m: u32, u: f32, v: f32) -> vec2<f32> {
     let n = params.map_res;
     let base = m * n * n;
-    let top = f32(n - 1u);
-    let x = clamp((u + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
-    let y = clamp((v + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
-    let x0 = u32(floor(x));
-    let y0 = u32(floor(y));
-    let x1 = min(x0 + 1u, n - 1u);
-    let y1 = min(y0 + 1u, n - 1u);
-    let fx = x - f32(x0);
-    let fy = y - f32(y0);
-    let r0 = atlas[base + y0 * n + x0] * (1.0 - fx) + atlas[base + y0 * n + x1] * fx;
-    let r1 = atlas[base + y1 * n + x0] * (1.0 - fx) + atlas[base + y1 * n + x1] * fx;
-    return r0 * (1.0 - fy) + r1 * fy;
+    let b = bilinear_texels(n, u, v);
+    return bilinear_mix(b, atlas[base + b.i00], atlas[base + b.i10], atlas[base + b.i01], atlas[base + b.i11]);
 }
 
 // `ImperfectShadowMaps::visibility` of map `m`, whose origin is `o`: 0 below the map's horizon (or at its origin), otherwise
@@ -56,7 +46,7 @@ fn imperfect_shadow_maps_visibility(m: u32, o: GpuMapOrigin, p: vec3<f32>) -> f3
 }
 
 // One VPL's contribution at point x: (radiance, 1 when the pair counts, 1 when clamped, 0).
-fn vpl_pair(x: GpuVplPoint, mx: GpuBrdf, k: u32) -> array<vec3<f32>, 2> {
+fn vpl_pair(x: GpuSurfacePoint, mx: GpuBrdf, k: u32) -> array<vec3<f32>, 2> {
     let d = vpls[k].position - x.p;
     let d2 = dot(d, d);
     let to_vpl = d * inverseSqrt(d2);

@@ -5,18 +5,13 @@
 mod common;
 
 use interreflect::image::Image;
-use interreflect::render::cpu::reference::{Progress, no_progress};
-use interreflect::render::cpu::vpl::{VplOptions, VplStats, default_clamp_distance, render_vpl};
+use interreflect::render::cpu::vpl::{
+    VplOptions, VplStats, default_clamp_distance, render_vpl_quiet,
+};
 use interreflect::render::{Device, Visibility};
-use std::sync::atomic::AtomicBool;
 
 fn vpl_render(name: &str, cpu_sum: bool) -> (Image, VplStats) {
     let (scene, accel) = common::scene_and_accel(name);
-    let cancel = AtomicBool::new(false);
-    let progress = Progress {
-        done: &no_progress,
-        cancel: &cancel,
-    };
     let width = 48;
     let opts = VplOptions {
         width,
@@ -31,7 +26,7 @@ fn vpl_render(name: &str, cpu_sum: bool) -> (Image, VplStats) {
         device: Device::Gpu,
         cpu_sum,
     };
-    render_vpl(&scene, &accel, &opts, &progress).expect("not cancelled")
+    render_vpl_quiet(&scene, &accel, &opts)
 }
 
 /// The indirect light of ring, bunny and dragon (vpl, `--visibility approx`, 48 px, 2 spp)

@@ -209,7 +209,7 @@ struct GpuVplParams {
 }
 
 // A pixel sample on a receiver for the VPL pass: point, normals, frame, eye direction.
-struct GpuVplPoint {
+struct GpuSurfacePoint {
     p: vec3<f32>,
     material: u32,
     ng: vec3<f32>,
@@ -251,4 +251,43 @@ struct GpuVplSum {
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,
+}
+
+// A light (`scene::Light`): kind 0 point, 1 spot, 2 directional (intensity = its irradiance).
+struct GpuLight {
+    position: vec3<f32>,
+    kind: u32,
+    direction: vec3<f32>,
+    cos_cone: f32,
+    intensity: vec3<f32>,
+    cos_falloff: f32,
+    map: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// A variance shadow map: projection 0 cube, 1 perspective, 2 orthographic; its faces' frames.
+struct GpuShadowMap {
+    origin: vec3<f32>,
+    projection: u32,
+    res: u32,
+    first_texel: u32,
+    margin: f32,
+    min_variance: f32,
+    bleeding: f32,
+    scale: f32,
+    _pad0: u32,
+    _pad1: u32,
+    forward: array<vec4<f32>, 6>,
+    right: array<vec4<f32>, 6>,
+    up: array<vec4<f32>, 6>,
+}
+
+// The direct-light pass's uniform (`render::gpu::direct`).
+struct GpuDirectParams {
+    count: u32,
+    light_count: u32,
+    eps: f32,
+    _pad0: u32,
 }

@@ -511,3 +511,33 @@ fn srgb_oetf(x_in: f32) -> f32 {
     }
     return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
 }
+
+// ---- Bilinear lookups in an n × n map of moments over [−1, 1]² (texel centres at
+// (2i + 1)/n − 1), clamped to the outermost centres: `visibility::vsm::bilinear_moments`,
+// split so that each pass reads the four texels from its own buffer.
+struct Bilinear {
+    // Offsets of the texels (x0, y0), (x1, y0), (x0, y1), (x1, y1) within the map.
+    i00: u32,
+    i10: u32,
+    i01: u32,
+    i11: u32,
+    fx: f32,
+    fy: f32,
+}
+
+fn bilinear_texels(n: u32, u: f32, v: f32) -> Bilinear {
+    let top = f32(n - 1u);
+    let x = clamp((u + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
+    let y = clamp((v + 1.0) * 0.5 * f32(n) - 0.5, 0.0, top);
+    let x0 = u32(floor(x));
+    let y0 = u32(floor(y));
+    let x1 = min(x0 + 1u, n - 1u);
+    let y1 = min(y0 + 1u, n - 1u);
+    return Bilinear(y0 * n + x0, y0 * n + x1, y1 * n + x0, y1 * n + x1, x - f32(x0), y - f32(y0));
+}
+
+fn bilinear_mix(b: Bilinear, m00: vec2<f32>, m10: vec2<f32>, m01: vec2<f32>, m11: vec2<f32>) -> vec2<f32> {
+    let r0 = m00 * (1.0 - b.fx) + m10 * b.fx;
+    let r1 = m01 * (1.0 - b.fx) + m11 * b.fx;
+    return r0 * (1.0 - b.fy) + r1 * b.fy;
+}

@@ -520,6 +520,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         };
         shadow_map_fallback(&args, &stats.shadow_maps_on)?;
         gpu_shading_fallback(&args, &stats.indirect_on)?;
+        gpu_direct_fallback(&args, &stats.direct_on)?;
         log(format!(
             "vpl: {} VPLs, clamp distance {:.4} ({} of {} pairs clamped), {} visibility rays",
             stats.vpls,
@@ -536,6 +537,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             log(format!(
                 "vpl one-bounce sum on the GPU {adapter}: {:.2} s (primary hits included)",
                 stats.seconds.gpu_shading
+            ));
+        }
+        if let Some(adapter) = stats.direct_on.strip_prefix("gpu ") {
+            log(format!(
+                "vpl direct light on the GPU {adapter}: {:.2} s",
+                stats.seconds.gpu_direct
             ));
         }
         let nonfinite = stats.nonfinite_samples;
@@ -583,6 +590,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         };
         shadow_map_fallback(&args, &stats.shadow_maps_on)?;
         gpu_shading_fallback(&args, &stats.shading_on)?;
+        gpu_direct_fallback(&args, &stats.direct_on)?;
         let s = &stats;
         log(format!(
             "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
@@ -612,6 +620,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
                 s.gpu_uploads.iter().map(|u| u.leaves).sum::<usize>(),
                 s.gpu_uploads.iter().map(|u| u.maps).sum::<usize>(),
                 bytes as f64 / (1u64 << 20) as f64
+            ));
+        }
+        if let Some(adapter) = s.direct_on.strip_prefix("gpu ") {
+            log(format!(
+                "sg direct light on the GPU {adapter}: {:.2} s",
+                s.seconds.gpu_direct
             ));
         }
         if args.visibility == Visibility::Approx {
@@ -874,6 +888,16 @@ fn gpu_shading_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
         on,
         "the indirect light could not be shaded on the GPU",
         "indirect light shaded on the CPU",
+    )
+}
+
+/// Where the direct light was computed ("cpu (why)" when the GPU was asked for and failed).
+fn gpu_direct_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
+    gpu_fallback(
+        args,
+        on,
+        "the direct light could not be computed on the GPU",
+        "direct light computed on the CPU",
     )
 }
 

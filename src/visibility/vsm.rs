@@ -62,6 +62,21 @@ enum Projection {
     Ortho { origin: Vec3, half: f32 },
 }
 
+/// A shadow map as the GPU reads it: projection 0 cube, 1 perspective (`scale` = tan of the
+/// half-angle), 2 orthographic (`scale` = half-extent), each face's (forward, right, up), the
+/// moments face after face.
+pub(crate) struct ShadowMapParts<'a> {
+    pub projection: u32,
+    pub origin: Vec3,
+    pub scale: f32,
+    pub faces: Vec<[Vec3; 3]>,
+    pub res: u32,
+    pub moments: &'a [Vec2],
+    pub bleeding: f32,
+    pub min_variance: f32,
+    pub margin: f32,
+}
+
 /// A variance shadow map of one light.
 pub struct VarianceShadowMap {
     projection: Projection,
@@ -287,6 +302,30 @@ impl VarianceShadowMap {
             far: self.far,
             resolution: self.res,
         })
+    }
+
+    /// What the GPU reads (`render::gpu::direct`).
+    pub(crate) fn parts(&self) -> ShadowMapParts<'_> {
+        let (projection, origin, scale) = match self.projection {
+            Projection::Cube { position } => (0, position, 0.0),
+            Projection::Perspective { position, tan_half } => (1, position, tan_half),
+            Projection::Ortho { origin, half } => (2, origin, half),
+        };
+        ShadowMapParts {
+            projection,
+            origin,
+            scale,
+            faces: self
+                .faces
+                .iter()
+                .map(|f| [f.forward, f.right, f.up])
+                .collect(),
+            res: self.res,
+            moments: &self.moments,
+            bleeding: self.bleeding,
+            min_variance: self.min_variance,
+            margin: self.margin,
+        }
     }
 
     /// The lit fraction at `p` in [0, 1] (1 outside the map, where the light's own falloff

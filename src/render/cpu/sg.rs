@@ -10,7 +10,8 @@
 
 use super::reference::Progress;
 use super::surface::{
-    SurfacePoint, light_visible, ray_epsilon, reflected_light, reflected_light_with,
+    SurfacePoint, gpu_points, light_visible, ray_epsilon, reflected_light, reflected_light_with,
+    sample_points, scatter,
 };
 use crate::accel::{Accel, Hit};
 use crate::cut::{
@@ -64,7 +65,8 @@ pub struct SgOptions {
     pub visibility: Visibility,
     /// Where the stages with a GPU pass run: point lights' shadow maps (`auto` or `gpu`), and
     /// with `gpu` only, the shading over vertex cuts under `--visibility approx` with maps at
-    /// tree nodes (on lavapipe it is slower than the CPU twin so far; docs/gpu.md).
+    /// tree nodes and the direct light when every light has a shadow map (on lavapipe they
+    /// are slower than their CPU twins so far; docs/gpu.md).
     pub device: Device,
 }
 
@@ -83,6 +85,9 @@ pub struct SgTimes {
     /// The indirect light on the GPU (`render::gpu::sg_shade`, with `shading_on` "gpu …"):
     /// gathering and uploading the cuts, the shading itself, the read-back; 0 otherwise.
     pub gpu_shading: f64,
+    /// The direct light on the GPU (`render::gpu::direct`, with `direct_on` "gpu …"); 0
+    /// otherwise.
+    pub gpu_direct: f64,
     pub shading: f64,
 }
 
@@ -98,6 +103,10 @@ pub struct SgStats {
     /// or "cpu (why the GPU failed)"; empty otherwise.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub shading_on: String,
+    /// Where the direct light was computed: "cpu", "gpu (adapter)" (`--device gpu` with a
+    /// shadow map for every light), or "cpu (why the GPU failed)"; empty without direct light.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub direct_on: String,
     /// Per light, what the GPU shading uploaded (empty on the CPU).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub gpu_uploads: Vec<crate::render::gpu::sg_shade::ShadeUpload>,
@@ -375,6 +384,19 @@ pub fn render_sg(
     stats.seconds.gpu_shading = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
+    let (on, gpu_direct) = direct_on_gpu(
+        scene,
+        opts.device,
+        opts.direct,
+        &maps,
+        &hits,
+        eps,
+        progress.cancel,
+    )?;
+    stats.direct_on = on;
+    stats.seconds.gpu_direct = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
     let mut img = Image::new(opts.width, opts.height);
     img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         if progress.cancel.load(Ordering::Relaxed) {
@@ -392,6 +414,7 @@ pub fn render_sg(
                 let v = ctx.shade(
                     hits[p * spp + s].as_ref(),
                     vertex_cuts.as_ref(),
+                    gpu_direct.as_ref().map(|g| g[p * spp + s]),
                     gpu_indirect.as_ref().map(|g| g[p * spp + s]),
                     &mut scratch,
                     &tally,
@@ -517,6 +540,56 @@ pub(super) fn direct_light(
         };
     }
     l
+}
+
+/// The direct light of every sample (`hits`) on the GPU (`render::gpu::direct`), with
+/// `--device gpu` when every light has a shadow map: where it ran ("cpu", "gpu (adapter)",
+/// "cpu (the GPU failed: …)"; empty without direct light) and the values, `None` when the CPU
+/// is to compute them. `None` when cancelled.
+pub(super) fn direct_on_gpu(
+    scene: &Scene,
+    device: Device,
+    direct: bool,
+    maps: &[Option<VarianceShadowMap>],
+    hits: &[Option<Hit>],
+    eps: f32,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Option<(String, Option<Vec<Vec3>>)> {
+    if !direct {
+        return Some((String::new(), None));
+    }
+    let all_mapped = !scene.lights.is_empty()
+        && maps.len() == scene.lights.len()
+        && maps.iter().all(Option::is_some);
+    if device != Device::Gpu || !all_mapped {
+        return Some(("cpu".into(), None));
+    }
+    let run = || -> Result<Option<(Vec<Vec3>, String)>, crate::render::gpu::GpuError> {
+        let gpu = crate::render::gpu::Gpu::new()?;
+        // Points seen from the front reflect direct light; the others get none.
+        let (index, points) = gpu_points(scene, hits, scene.camera.position, |_, sp, wo, wo_l| {
+            sp.ng.dot(wo) > 0.0 && wo_l.z > 0.0
+        });
+        let materials: Vec<crate::brdf::Brdf> = scene.materials.iter().map(|m| m.brdf).collect();
+        let Some(values) = crate::render::gpu::direct::direct(
+            &gpu,
+            &scene.lights,
+            maps,
+            &materials,
+            &points,
+            eps,
+            cancel,
+        )?
+        else {
+            return Ok(None);
+        };
+        Ok(Some((scatter(&index, &values), gpu.adapter.clone())))
+    };
+    match run() {
+        Ok(Some((v, adapter))) => Some((format!("gpu ({adapter})"), Some(v))),
+        Ok(None) => None,
+        Err(e) => Some((format!("cpu (the GPU failed: {e})"), None)),
+    }
 }
 
 /// The light's visibility at surface point `p`: a shadow ray (0 or 1), or the shadow map.
@@ -790,12 +863,13 @@ impl Ctx<'_> {
         (num / (den * t.light_visibility), rays)
     }
 
-    /// Radiance of one pixel sample; with `indirect` (shaded on the GPU) only its direct light
-    /// is computed here.
+    /// Radiance of one pixel sample; `direct` and `indirect` are its direct and indirect light
+    /// when the GPU computed them.
     fn shade(
         &self,
         hit: Option<&Hit>,
         vertex_cuts: Option<&VertexCuts>,
+        direct: Option<Vec3>,
         indirect: Option<Vec3>,
         scratch: &mut Vec<CutEntry>,
         tally: &Tally,
@@ -810,7 +884,10 @@ impl Ctx<'_> {
         let brdf = self.scene.tri_material(hit.tri);
         let mut l = Vec3::ZERO;
         if self.opts.direct {
-            l += direct_light(self.scene, self.accel, self.maps, brdf, &sp, wo, self.eps);
+            l += match direct {
+                Some(d) => d,
+                None => direct_light(self.scene, self.accel, self.maps, brdf, &sp, wo, self.eps),
+            };
         }
         if let Some(v) = indirect {
             return l + v;
@@ -901,33 +978,18 @@ impl Ctx<'_> {
     {
         use crate::render::gpu::sg_shade::{self, LightCuts, ShadePoint};
         let gpu = crate::render::gpu::Gpu::new()?;
-        let found: Vec<Option<ShadePoint>> = hits
-            .par_iter()
-            .map(|h| {
-                let hit = h.as_ref()?;
-                if !self.scene.tri_object(hit.tri).receiver {
-                    return None;
-                }
-                let p = self.scene.mesh.point(hit.tri, hit.u, hit.v);
-                let wo = (self.camera_pos - p).normalize();
-                let sp = SurfacePoint::from_hit(self.scene, hit, wo)?;
-                let rx = ReceiverLobes::new(self.scene.tri_material(hit.tri), sp.frame.n, wo);
-                (!rx.is_black()).then(|| ShadePoint {
-                    x: sp.p,
-                    xo: sp.offset(self.eps),
-                    vertex: nearest_vertex(self.scene, hit),
-                    rx,
-                })
-            })
-            .collect();
-        let mut index = vec![u32::MAX; hits.len()];
-        let mut points = Vec::new();
-        for (i, p) in found.into_iter().enumerate() {
-            if let Some(p) = p {
-                index[i] = points.len() as u32;
-                points.push(p);
+        let (index, points) = sample_points(self.scene, hits, self.camera_pos, |hit, sp, wo, _| {
+            if !self.scene.tri_object(hit.tri).receiver {
+                return None;
             }
-        }
+            let rx = ReceiverLobes::new(self.scene.tri_material(hit.tri), sp.frame.n, wo);
+            (!rx.is_black()).then(|| ShadePoint {
+                x: sp.p,
+                xo: sp.offset(self.eps),
+                vertex: nearest_vertex(self.scene, hit),
+                rx,
+            })
+        });
         let lights: Vec<LightCuts> = self
             .lits
             .iter()
@@ -963,16 +1025,7 @@ impl Ctx<'_> {
                 .fetch_add(points.len() as u64, Ordering::Relaxed);
             tally.add_counters(&CutCounters { evaluated, leaves });
         }
-        let radiance = index
-            .iter()
-            .map(|&i| {
-                if i == u32::MAX {
-                    Vec3::ZERO
-                } else {
-                    values[i as usize]
-                }
-            })
-            .collect();
+        let radiance = scatter(&index, &values);
         Ok(Some((
             sg_shade::Shaded { radiance, uploads },
             gpu.adapter.clone(),

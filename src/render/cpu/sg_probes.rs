@@ -522,7 +522,7 @@ fn firefly_probe() {
             0.0,
             f32::INFINITY,
         );
-        let v = ctx.shade(hit.as_ref(), None, None, &mut scratch, &tally);
+        let v = ctx.shade(hit.as_ref(), None, None, None, &mut scratch, &tally);
         let obj = hit.map(|h| scene.tri_object(h.tri).name.clone());
         println!("sample {s:3} at ({:.3}, {:.3}): {obj:?} {v}", o.x, o.y);
         if v.element_sum() > best.0 {

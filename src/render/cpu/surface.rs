@@ -129,3 +129,69 @@ pub fn light_visible(accel: &Accel, light: &Light, p: Vec3, eps: f32) -> bool {
         .incident(p)
         .is_some_and(|inc| shadow_ray_clear(accel, p + inc.wi * eps, &inc, eps))
 }
+
+/// The pixel samples' points for a GPU pass: `index[i]` is the point `make` built for
+/// `hits[i]` (`u32::MAX` where there is no hit, no surface point, or `make` returns `None`),
+/// each surface point seen from `camera`; `make(hit, sp, wo, wo_local)`.
+pub(crate) fn sample_points<P: Send>(
+    scene: &Scene,
+    hits: &[Option<Hit>],
+    camera: Vec3,
+    make: impl Fn(&Hit, &SurfacePoint, Vec3, Vec3) -> Option<P> + Sync,
+) -> (Vec<u32>, Vec<P>) {
+    use rayon::prelude::*;
+    let found: Vec<Option<P>> = hits
+        .par_iter()
+        .map(|h| {
+            let hit = h.as_ref()?;
+            let wo = (camera - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+            let sp = SurfacePoint::from_hit(scene, hit, wo)?;
+            make(hit, &sp, wo, sp.frame.to_local(wo))
+        })
+        .collect();
+    let mut index = vec![u32::MAX; hits.len()];
+    let mut points = Vec::new();
+    for (i, p) in found.into_iter().enumerate() {
+        if let Some(p) = p {
+            index[i] = points.len() as u32;
+            points.push(p);
+        }
+    }
+    (index, points)
+}
+
+/// [`sample_points`] as the `vpl` and `direct` passes read them, where `keep(hit, sp, wo,
+/// wo_local)`.
+pub(crate) fn gpu_points(
+    scene: &Scene,
+    hits: &[Option<Hit>],
+    camera: Vec3,
+    keep: impl Fn(&Hit, &SurfacePoint, Vec3, Vec3) -> bool + Sync,
+) -> (Vec<u32>, Vec<crate::render::gpu::layout::GpuSurfacePoint>) {
+    sample_points(scene, hits, camera, |hit, sp, wo, wo_l| {
+        keep(hit, sp, wo, wo_l).then(|| {
+            crate::render::gpu::layout::GpuSurfacePoint::new(
+                sp.p,
+                sp.ng,
+                &sp.frame,
+                wo_l,
+                scene.tri_material_index(hit.tri),
+            )
+        })
+    })
+}
+
+/// `values` of a GPU pass's points spread back over the samples (`index` from
+/// [`gpu_points`]), `T::default()` where a sample has no point.
+pub(crate) fn scatter<T: Copy + Default>(index: &[u32], values: &[T]) -> Vec<T> {
+    index
+        .iter()
+        .map(|&i| {
+            if i == u32::MAX {
+                T::default()
+            } else {
+                values[i as usize]
+            }
+        })
+        .collect()
+}

@@ -23,8 +23,8 @@
 //! (docs/gpu.md).
 
 use super::reference::Progress;
-use super::sg::{direct_light, light_fraction, sample_offset, shadow_maps};
-use super::surface::{SurfacePoint, ray_epsilon};
+use super::sg::{direct_light, direct_on_gpu, light_fraction, sample_offset, shadow_maps};
+use super::surface::{SurfacePoint, gpu_points, ray_epsilon, scatter};
 use crate::accel::{Accel, Hit};
 use crate::brdf::Brdf;
 use crate::image::Image;
@@ -32,7 +32,7 @@ use crate::math::{Frame, triangle_barycentrics};
 use crate::precompute::vpl::{self, Vpl};
 use crate::render::Device;
 use crate::render::Visibility;
-use crate::render::gpu::layout::{GpuVpl, GpuVplPoint};
+use crate::render::gpu::layout::GpuVpl;
 use crate::render::gpu::vpl::{MapAtlas, VplShaded};
 use crate::scene::Scene;
 use crate::visibility::ism::ImperfectShadowMaps;
@@ -58,7 +58,8 @@ pub struct VplOptions {
     /// The geometry term's distance clamp d_c (scene units; 0 = no clamp).
     pub clamp_distance: f32,
     /// Where the stages with a GPU pass run: point lights' shadow maps (`auto` or `gpu`) and,
-    /// with `gpu` and `approx` only, the one-bounce sum over the VPLs.
+    /// with `gpu` only, the one-bounce sum over the VPLs (`approx`) and the direct light (with
+    /// a shadow map for every light).
     pub device: Device,
     /// Sum the VPLs on the CPU even with `device` gpu: the GPU pass's twin with the same
     /// shadow maps (and so the same VPLs), for the tests.
@@ -74,8 +75,11 @@ pub struct VplTimes {
     pub vpls: f64,
     /// Imperfect shadow maps (`approx`).
     pub ism: f64,
-    /// The one-bounce sum on the GPU, with its uploads (`indirect_on` "gpu …"); 0 otherwise.
+    /// The one-bounce sum on the GPU with the primary rays (`indirect_on` "gpu …"); 0
+    /// otherwise.
     pub gpu_shading: f64,
+    /// The direct light on the GPU (`direct_on` "gpu …"); 0 otherwise.
+    pub gpu_direct: f64,
     /// The pixel loop: primary hits (unless the GPU pass cast them), direct light, and the
     /// one-bounce sum when it runs on the CPU.
     pub shading: f64,
@@ -92,6 +96,10 @@ pub struct VplStats {
     /// used)"; empty without indirect light.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub indirect_on: String,
+    /// Where the direct light was computed: "cpu", "gpu (adapter)" (`--device gpu` with a
+    /// shadow map for every light), or "cpu (why the GPU failed)"; empty without direct light.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub direct_on: String,
     /// VPLs of all lights.
     pub vpls: usize,
     pub clamp_distance: f32,
@@ -127,6 +135,16 @@ struct LightVpls<'a> {
 /// The default clamp distance: 1/50 of the scene's bounding-box diagonal.
 pub fn default_clamp_distance(scene: &Scene) -> f32 {
     scene.mesh.diagonal() / 50.0
+}
+
+/// Convenience: [`render_vpl`] with no progress reporting or cancellation.
+pub fn render_vpl_quiet(scene: &Scene, accel: &Accel, opts: &VplOptions) -> (Image, VplStats) {
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let p = Progress {
+        done: &super::reference::no_progress,
+        cancel: &cancel,
+    };
+    render_vpl(scene, accel, opts, &p).expect("not cancelled")
 }
 
 /// Renders `scene` with the VPL baseline. `None` when cancelled.
@@ -222,19 +240,11 @@ pub fn render_vpl(
         AtomicU64::new(0),
     );
 
-    // The one-bounce sum on the GPU (primary hits cast first, for every sample).
+    // The stages on the GPU (--device gpu): primary hits cast first, for every sample; then the
+    // one-bounce sum (with `approx`) and the direct light (with a shadow map for every light).
     let t = Instant::now();
-    let mut hits: Option<Vec<Option<Hit>>> = None;
-    let mut gpu_sums: Option<Vec<VplShaded>> = None;
-    if opts.indirect {
-        stats.indirect_on = "cpu".into();
-    }
-    if opts.indirect
-        && opts.visibility == Visibility::Approx
-        && opts.device == Device::Gpu
-        && !opts.cpu_sum
-    {
-        let all: Vec<Option<Hit>> = (0..opts.width as usize * opts.height as usize * spp as usize)
+    let hits: Option<Vec<Option<Hit>>> = (opts.device == Device::Gpu).then(|| {
+        (0..opts.width as usize * opts.height as usize * spp as usize)
             .into_par_iter()
             .map(|i| {
                 let (pixel, s) = (i / spp as usize, (i % spp as usize) as u32);
@@ -243,8 +253,17 @@ pub fn render_vpl(
                 let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
                 accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
             })
-            .collect();
-        match gpu_indirect(scene, &lights, &all, opts.clamp_distance, progress.cancel) {
+            .collect()
+    });
+    let mut gpu_sums: Option<Vec<VplShaded>> = None;
+    if opts.indirect {
+        stats.indirect_on = "cpu".into();
+    }
+    if let Some(all) = hits
+        .as_ref()
+        .filter(|_| opts.indirect && opts.visibility == Visibility::Approx && !opts.cpu_sum)
+    {
+        match gpu_indirect(scene, &lights, all, opts.clamp_distance, progress.cancel) {
             Ok(Some((sums, adapter))) => {
                 stats.indirect_on = format!("gpu ({adapter})");
                 gpu_sums = Some(sums);
@@ -252,9 +271,20 @@ pub fn render_vpl(
             Ok(None) => return None,
             Err(e) => stats.indirect_on = format!("cpu (the GPU failed: {e})"),
         }
-        hits = Some(all);
     }
     stats.seconds.gpu_shading = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let (on, gpu_direct) = direct_on_gpu(
+        scene,
+        opts.device,
+        opts.direct,
+        &maps,
+        hits.as_deref().unwrap_or_default(),
+        eps,
+        progress.cancel,
+    )?;
+    stats.direct_on = on;
+    stats.seconds.gpu_direct = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let mut img = Image::new(opts.width, opts.height);
@@ -279,6 +309,7 @@ pub fn render_vpl(
                         accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
                     }
                 };
+                let direct = gpu_direct.as_ref().map(|g| g[i]);
                 let indirect = match &gpu_sums {
                     Some(g) => Indirect::Gpu(g[i]),
                     None => Indirect::Cpu(&lights),
@@ -288,6 +319,7 @@ pub fn render_vpl(
                     accel,
                     opts,
                     &maps,
+                    direct,
                     indirect,
                     hit.as_ref(),
                     eps,
@@ -332,6 +364,7 @@ fn shade(
     accel: &Accel,
     opts: &VplOptions,
     maps: &[Option<VarianceShadowMap>],
+    direct: Option<Vec3>,
     indirect: Indirect,
     hit: Option<&Hit>,
     eps: f32,
@@ -349,7 +382,10 @@ fn shade(
     let brdf = scene.tri_material(hit.tri);
     let mut l = Vec3::ZERO;
     if opts.direct {
-        l += direct_light(scene, accel, maps, brdf, &sp, wo, eps);
+        l += match direct {
+            Some(d) => d,
+            None => direct_light(scene, accel, maps, brdf, &sp, wo, eps),
+        };
     }
     if !opts.indirect || !scene.tri_object(hit.tri).receiver {
         return l;
@@ -422,36 +458,9 @@ fn gpu_indirect(
     cancel: &std::sync::atomic::AtomicBool,
 ) -> Result<Option<(Vec<VplShaded>, String)>, crate::render::gpu::GpuError> {
     let gpu = crate::render::gpu::Gpu::new()?;
-    let camera = scene.camera.position;
-    let found: Vec<Option<GpuVplPoint>> = hits
-        .par_iter()
-        .map(|h| {
-            let hit = h.as_ref()?;
-            if !scene.tri_object(hit.tri).receiver {
-                return None;
-            }
-            let wo = (camera - scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
-            let sp = SurfacePoint::from_hit(scene, hit, wo)?;
-            let wo_l = sp.frame.to_local(wo);
-            (wo_l.z > 0.0).then(|| {
-                GpuVplPoint::new(
-                    sp.p,
-                    sp.ng,
-                    &sp.frame,
-                    wo_l,
-                    scene.tri_material_index(hit.tri),
-                )
-            })
-        })
-        .collect();
-    let mut index = vec![u32::MAX; hits.len()];
-    let mut points = Vec::new();
-    for (i, p) in found.into_iter().enumerate() {
-        if let Some(p) = p {
-            index[i] = points.len() as u32;
-            points.push(p);
-        }
-    }
+    let (index, points) = gpu_points(scene, hits, scene.camera.position, |hit, _, _, wo_l| {
+        scene.tri_object(hit.tri).receiver && wo_l.z > 0.0
+    });
     let mut atlas = MapAtlas::default();
     let mut vpls = Vec::new();
     for lv in lights {
@@ -487,15 +496,6 @@ fn gpu_indirect(
     else {
         return Ok(None);
     };
-    let per_sample = index
-        .iter()
-        .map(|&i| {
-            if i == u32::MAX {
-                VplShaded::default()
-            } else {
-                sums[i as usize]
-            }
-        })
-        .collect();
+    let per_sample = scatter(&index, &sums);
     Ok(Some((per_sample, gpu.adapter.clone())))
 }

@@ -316,7 +316,7 @@ pub struct GpuVplParams {
 /// the direction to the eye in that frame and its material.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuVplPoint {
+pub struct GpuSurfacePoint {
     pub p: [f32; 3],
     pub material: u32,
     pub ng: [f32; 3],
@@ -329,6 +329,29 @@ pub struct GpuVplPoint {
     pub _pad3: f32,
     pub wo: [f32; 3],
     pub _pad4: f32,
+}
+
+impl GpuSurfacePoint {
+    /// A surface point `p` with geometric normal `ng`, shading frame `frame`, the direction to
+    /// the eye `wo_local` in that frame and material index `material`.
+    pub fn new(
+        p: glam::Vec3,
+        ng: glam::Vec3,
+        frame: &crate::math::Frame,
+        wo_local: glam::Vec3,
+        material: u32,
+    ) -> GpuSurfacePoint {
+        GpuSurfacePoint {
+            p: p.to_array(),
+            material,
+            ng: ng.to_array(),
+            t: frame.t.to_array(),
+            b: frame.b.to_array(),
+            n: frame.n.to_array(),
+            wo: wo_local.to_array(),
+            ..GpuSurfacePoint::default()
+        }
+    }
 }
 
 /// A VPL (`precompute::vpl::Vpl`) with its shading frame, the direction to its light in that
@@ -365,6 +388,99 @@ pub struct GpuVplSum {
     pub _pad0: u32,
     pub _pad1: u32,
     pub _pad2: u32,
+}
+
+/// A light (`scene::Light`): `kind` 0 point, 1 spot, 2 directional; `intensity` is the
+/// directional light's irradiance; `map` indexes the shadow maps (`u32::MAX`: none).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub kind: u32,
+    pub direction: [f32; 3],
+    pub cos_cone: f32,
+    pub intensity: [f32; 3],
+    pub cos_falloff: f32,
+    pub map: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+impl From<&crate::scene::Light> for GpuLight {
+    fn from(l: &crate::scene::Light) -> Self {
+        use crate::scene::Light;
+        let mut g = GpuLight {
+            map: u32::MAX,
+            ..GpuLight::default()
+        };
+        match *l {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                g.position = position.to_array();
+                g.intensity = intensity.to_array();
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_cone,
+                cos_falloff,
+            } => {
+                g.kind = 1;
+                g.position = position.to_array();
+                g.direction = direction.to_array();
+                g.intensity = intensity.to_array();
+                g.cos_cone = cos_cone;
+                g.cos_falloff = cos_falloff;
+            }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => {
+                g.kind = 2;
+                g.direction = direction.to_array();
+                g.intensity = irradiance.to_array();
+            }
+        }
+        g
+    }
+}
+
+/// A variance shadow map (`visibility::vsm::VarianceShadowMap`): `projection` 0 cube (six
+/// faces about `origin`), 1 perspective (`scale` = tan of the half-angle), 2 orthographic
+/// (`scale` = the half-extent); its moments start at texel `first_texel` of the moments buffer,
+/// face after face; face k looks along `forward[k]` with `right[k]`, `up[k]` spanning it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShadowMap {
+    pub origin: [f32; 3],
+    pub projection: u32,
+    pub res: u32,
+    pub first_texel: u32,
+    pub margin: f32,
+    pub min_variance: f32,
+    pub bleeding: f32,
+    pub scale: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub forward: [[f32; 4]; 6],
+    pub right: [[f32; 4]; 6],
+    pub up: [[f32; 4]; 6],
+}
+
+/// The direct-light pass's uniform (`super::direct`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuDirectParams {
+    pub count: u32,
+    pub light_count: u32,
+    /// The scene's ray epsilon: shadow-map lookups are offset by it off the surface and
+    /// towards the light.
+    pub eps: f32,
+    pub _pad0: u32,
 }
 
 /// A struct's name, size and (member, offset) list, for comparison with the shaders.
@@ -545,7 +661,7 @@ pub fn layouts() -> Vec<StructLayout> {
             _pad0,
             _pad1
         }),
-        layout!(GpuVplPoint {
+        layout!(GpuSurfacePoint {
             p,
             material,
             ng,
@@ -575,6 +691,39 @@ pub fn layouts() -> Vec<StructLayout> {
             power,
             _pad4,
             origin
+        }),
+        layout!(GpuLight {
+            position,
+            kind,
+            direction,
+            cos_cone,
+            intensity,
+            cos_falloff,
+            map,
+            _pad0,
+            _pad1,
+            _pad2
+        }),
+        layout!(GpuShadowMap {
+            origin,
+            projection,
+            res,
+            first_texel,
+            margin,
+            min_variance,
+            bleeding,
+            scale,
+            _pad0,
+            _pad1,
+            forward,
+            right,
+            up
+        }),
+        layout!(GpuDirectParams {
+            count,
+            light_count,
+            eps,
+            _pad0
         }),
         layout!(GpuVplSum {
             radiance,

@@ -8,6 +8,7 @@
 //! Passes so far: [`prt::relight`] (`shaders/prt_relight.wgsl`) and [`twins::run`]
 //! (`shaders/math_twins.wgsl`, which runs the WGSL math functions over a table for the tests).
 
+pub mod direct;
 pub mod gbuffer;
 pub mod layout;
 pub mod prt;
@@ -286,6 +287,35 @@ impl Gpu {
     }
 
     /// A bind group of `layout` with `buffers[i]` at binding i.
+    /// A read-only storage buffer holding `bytes`, or an error naming `what`'s `label` and
+    /// `hint` (what the user can change) when it exceeds the binding limit.
+    fn storage_buffer(
+        &self,
+        what: &str,
+        label: &str,
+        bytes: &[u8],
+        hint: &str,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        use wgpu::util::DeviceExt;
+        if bytes.len() as u64 > self.max_binding {
+            return Err(GpuError::Failed {
+                what: what.into(),
+                reason: format!(
+                    "the {label} ({} bytes) exceed the largest binding ({} bytes); {hint}",
+                    bytes.len(),
+                    self.max_binding
+                ),
+            });
+        }
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
+    }
+
     fn bind_buffers(
         &self,
         layout: &wgpu::BindGroupLayout,

@@ -314,20 +314,12 @@ pub fn shade(
     let mut uploads = Vec::new();
     for light in lights {
         let d = gather(light, points)?;
-        let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer, GpuError> {
-            if bytes.len() as u64 > gpu.max_binding {
-                return Err(failed(format!(
-                    "the {label} ({} bytes) exceed the largest binding ({} bytes); render with --device cpu or fewer node maps",
-                    bytes.len(),
-                    gpu.max_binding
-                )));
-            }
-            Ok(
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: bytes,
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
+        let storage = |label: &str, bytes: &[u8]| {
+            gpu.storage_buffer(
+                "sg shading",
+                label,
+                bytes,
+                "render with --device cpu or fewer node maps",
             )
         };
         let bufs = [

@@ -23,7 +23,7 @@ pub const SHARED: [(&str, &str); 4] = [
 ];
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 9] = [
+pub const PASSES: [(&str, &str); 10] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -42,6 +42,7 @@ pub const PASSES: [(&str, &str); 9] = [
         include_str!("../../../shaders/sg_shade_sum.wgsl"),
     ),
     ("vpl", include_str!("../../../shaders/vpl.wgsl")),
+    ("direct", include_str!("../../../shaders/direct.wgsl")),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.

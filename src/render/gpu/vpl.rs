@@ -10,10 +10,9 @@
 //! each chunk summed over all VPLs and read back before the next, so that no binding grows
 //! with the image and a cancelled render stops between chunks.
 
-use super::layout::{GpuBrdf, GpuMapOrigin, GpuVpl, GpuVplParams, GpuVplPoint, GpuVplSum};
+use super::layout::{GpuBrdf, GpuMapOrigin, GpuSurfacePoint, GpuVpl, GpuVplParams, GpuVplSum};
 use super::{Gpu, GpuError, describe};
 use crate::brdf::Brdf;
-use crate::math::Frame;
 use crate::visibility::ism::ImperfectShadowMaps;
 use glam::Vec3;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,23 +29,6 @@ fn failed(reason: impl Into<String>) -> GpuError {
     GpuError::Failed {
         what: "VPL shading".into(),
         reason: reason.into(),
-    }
-}
-
-impl GpuVplPoint {
-    /// A receiver point `p` with geometric normal `ng`, shading frame `frame`, the direction to
-    /// the eye `wo_local` in that frame and material index `material`.
-    pub fn new(p: Vec3, ng: Vec3, frame: &Frame, wo_local: Vec3, material: u32) -> GpuVplPoint {
-        GpuVplPoint {
-            p: p.to_array(),
-            material,
-            ng: ng.to_array(),
-            t: frame.t.to_array(),
-            b: frame.b.to_array(),
-            n: frame.n.to_array(),
-            wo: wo_local.to_array(),
-            ..GpuVplPoint::default()
-        }
     }
 }
 
@@ -104,7 +86,7 @@ pub struct VplShaded {
 pub fn shade(
     gpu: &Gpu,
     materials: &[Brdf],
-    points: &[GpuVplPoint],
+    points: &[GpuSurfacePoint],
     vpls: &[GpuVpl],
     maps: &MapAtlas,
     clamp_distance: f32,
@@ -127,20 +109,12 @@ pub fn shade(
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let pipeline = gpu.compute_pipeline("vpl");
-    let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer, GpuError> {
-        if bytes.len() as u64 > gpu.max_binding {
-            return Err(failed(format!(
-                "the {label} ({} bytes) exceed the largest binding ({} bytes); render with --device cpu or a lower resolution",
-                bytes.len(),
-                gpu.max_binding
-            )));
-        }
-        Ok(
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            }),
+    let storage = |label: &str, bytes: &[u8]| {
+        gpu.storage_buffer(
+            "VPL shading",
+            label,
+            bytes,
+            "render with --device cpu or a lower resolution",
         )
     };
     let gpu_materials: Vec<GpuBrdf> = materials.iter().map(GpuBrdf::from).collect();
