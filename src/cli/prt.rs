@@ -140,8 +140,8 @@ pub fn render(
     // transfer is computed.
     let gpu = match args.device {
         Device::Cpu => None,
-        Device::Gpu => Some(Gpu::new()?),
-        Device::Auto => match Gpu::new() {
+        Device::Gpu => Some(Gpu::shared()?),
+        Device::Auto => match Gpu::shared() {
             Ok(g) => Some(g),
             Err(e) => {
                 eprintln!("notice: relighting on the CPU: {e}");
@@ -303,7 +303,7 @@ pub fn render(
             cache,
             nonfinite_vertices,
             relight_device: if gpu.is_some() { "gpu" } else { "cpu" },
-            adapter: gpu.map(|g| g.adapter),
+            adapter: gpu.map(|g| g.adapter.clone()),
             seconds: secs,
         },
     )))

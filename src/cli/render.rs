@@ -481,7 +481,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let checked_elsewhere = prt.is_some()
         || ((is_sg || args.method == Method::Vpl) && args.visibility != Visibility::Exact);
     if args.device == Device::Gpu && !checked_elsewhere {
-        interreflect::render::gpu::Gpu::new()
+        interreflect::render::gpu::Gpu::shared()
             .map_err(|e| anyhow::anyhow!("--device gpu: the PNG is tonemapped on the GPU: {e}"))?;
     }
     let t = Instant::now();
@@ -725,7 +725,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     // at most one 8-bit step from the CPU's, docs/gpu.md).
     let mut tonemap_on = "cpu".to_string();
     let written_png = if args.device == Device::Gpu {
-        let pixels = interreflect::render::gpu::Gpu::new().and_then(|gpu| {
+        let pixels = interreflect::render::gpu::Gpu::shared().and_then(|gpu| {
             tonemap_on = format!("gpu ({})", gpu.adapter);
             interreflect::render::gpu::tonemap::to_srgb8(&gpu, &img, &tm)
         });
@@ -863,7 +863,7 @@ fn workload(
 /// With `--device gpu`, shadow maps made on the GPU need an adapter: fail before rendering.
 fn shadow_map_device_check(args: &RenderArgs) -> anyhow::Result<()> {
     if args.device == Device::Gpu && args.visibility != Visibility::Exact {
-        interreflect::render::gpu::Gpu::new()
+        interreflect::render::gpu::Gpu::shared()
             .map_err(|e| anyhow::anyhow!("--device gpu: the shadow maps need the GPU: {e}"))?;
     }
     Ok(())

@@ -469,7 +469,7 @@ pub(super) fn shadow_maps(
     let gpu = if device == Device::Cpu || !point_lights {
         None
     } else {
-        match crate::render::gpu::Gpu::new() {
+        match crate::render::gpu::Gpu::shared() {
             Ok(g) => Some(g),
             Err(e) => {
                 place = format!("cpu (no GPU: {e})");
@@ -565,7 +565,7 @@ pub(super) fn direct_on_gpu(
         return Some(("cpu".into(), None));
     }
     let run = || -> Result<Option<(Vec<Vec3>, String)>, crate::render::gpu::GpuError> {
-        let gpu = crate::render::gpu::Gpu::new()?;
+        let gpu = crate::render::gpu::Gpu::shared()?;
         // Points seen from the front reflect direct light; the others get none.
         let (index, points) = gpu_points(scene, hits, scene.camera.position, |_, sp, wo, wo_l| {
             sp.ng.dot(wo) > 0.0 && wo_l.z > 0.0
@@ -977,7 +977,7 @@ impl Ctx<'_> {
     ) -> Result<Option<(crate::render::gpu::sg_shade::Shaded, String)>, crate::render::gpu::GpuError>
     {
         use crate::render::gpu::sg_shade::{self, LightCuts, ShadePoint};
-        let gpu = crate::render::gpu::Gpu::new()?;
+        let gpu = crate::render::gpu::Gpu::shared()?;
         let (index, points) = sample_points(self.scene, hits, self.camera_pos, |hit, sp, wo, _| {
             if !self.scene.tri_object(hit.tri).receiver {
                 return None;

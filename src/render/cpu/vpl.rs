@@ -457,7 +457,7 @@ fn gpu_indirect(
     clamp_distance: f32,
     cancel: &std::sync::atomic::AtomicBool,
 ) -> Result<Option<(Vec<VplShaded>, String)>, crate::render::gpu::GpuError> {
-    let gpu = crate::render::gpu::Gpu::new()?;
+    let gpu = crate::render::gpu::Gpu::shared()?;
     let (index, points) = gpu_points(scene, hits, scene.camera.position, |hit, _, _, wo_l| {
         scene.tri_object(hit.tri).receiver && wo_l.z > 0.0
     });

@@ -49,7 +49,13 @@ pub struct Gpu {
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Nanoseconds per timestamp tick, when the device has timestamp queries.
     timestamp_period: Option<f32>,
+    /// The compute pipelines built so far, by pass: lavapipe compiles a pipeline when it is
+    /// created (from Mesa's disk cache after the first time, still tens of milliseconds).
+    pipelines: Mutex<std::collections::HashMap<String, wgpu::ComputePipeline>>,
 }
+
+/// The process's shared device ([`Gpu::shared`]).
+static SHARED: Mutex<Option<Arc<Gpu>>> = Mutex::new(None);
 
 /// Timestamp queries around passes: pass `k` writes its start to query 2k and its end to
 /// 2k + 1; [`Timer::resolve`] appends the copy, [`Timer::read`] returns each pass's duration.
@@ -186,7 +192,21 @@ impl Gpu {
                 .max_storage_buffer_binding_size
                 .min(limits.max_buffer_size),
             uncaptured,
+            pipelines: Mutex::new(std::collections::HashMap::new()),
         })
+    }
+
+    /// One device for the whole process, opened on first use: the renderer's passes share it
+    /// (and its compiled pipelines) rather than each opening its own. A failure to open is
+    /// returned, and the next call tries again.
+    pub fn shared() -> Result<Arc<Gpu>, GpuError> {
+        let mut cell = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(g) = cell.as_ref() {
+            return Ok(g.clone());
+        }
+        let g = Arc::new(Gpu::new()?);
+        *cell = Some(g.clone());
+        Ok(g)
     }
 
     /// The assembled shader of `pass` (`shaders::source`), compiled.
@@ -202,8 +222,13 @@ impl Gpu {
 
     /// The compute pipeline of `pass`, whose entry point has the pass's name.
     fn compute_pipeline(&self, pass: &str) -> wgpu::ComputePipeline {
+        let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = cache.get(pass) {
+            return p.clone();
+        }
         let module = self.shader(pass);
-        self.device
+        let p = self
+            .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(pass),
                 layout: None,
@@ -211,7 +236,9 @@ impl Gpu {
                 entry_point: Some(pass),
                 compilation_options: Default::default(),
                 cache: None,
-            })
+            });
+        cache.insert(pass.to_string(), p.clone());
+        p
     }
 
     /// The render pipeline of `pass` that rasterises triangle lists of `vec3<f32>` positions
