@@ -81,3 +81,27 @@ fn a_mismatched_layout_is_detected() {
     let rust: Vec<usize> = gpu_sg.members.iter().map(|(_, o)| *o).collect();
     assert_ne!(offsets, rust);
 }
+
+/// Every pass has its page in `docs/passes/` (what it computes, its inputs and outputs, its
+/// twin and its cost), listed in that folder's README.
+#[test]
+fn every_pass_has_a_page() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/passes");
+    let index = std::fs::read_to_string(dir.join("README.md")).unwrap();
+    for (pass, _) in PASSES {
+        let page = dir.join(format!("{pass}.md"));
+        let text =
+            std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
+        assert!(
+            text.starts_with(&format!("# `{pass}`")),
+            "{pass}.md's title"
+        );
+        for part in ["**Computes.**", "**Inputs.**", "**Cost.**"] {
+            assert!(text.contains(part), "{pass}.md has no {part}");
+        }
+        assert!(
+            index.contains(&format!("({pass}.md)")),
+            "README.md does not list {pass}.md"
+        );
+    }
+}
