@@ -18,8 +18,9 @@ use glam::Vec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use wgpu::util::DeviceExt;
 
-/// VPLs one invocation sums per dispatch (three loop iterations each: the VPL loop and the two
-/// ends' BRDFs).
+/// VPLs one invocation sums per dispatch (one loop iteration each), and the size of the
+/// uniform buffer that holds them (256 × 176 bytes, under the 64 KiB uniform binding; the
+/// shader's `array<GpuVpl, 256>` has the same length).
 pub const VPL_CHUNK: usize = 256;
 
 /// Points per dispatch, at most.
