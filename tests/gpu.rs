@@ -131,10 +131,7 @@ fn no_adapter_fails_clearly_or_falls_back_to_the_cpu() {
     let auto = run("auto", true);
     let stderr = String::from_utf8_lossy(&auto.stderr);
     assert_eq!(auto.status.code(), Some(0), "{stderr}");
-    let notices: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("notice:"))
-        .collect();
+    let notices = common::notices(&stderr);
     assert_eq!(notices.len(), 1, "{stderr}");
     assert!(
         notices[0].starts_with("notice: relighting on the CPU: no GPU adapter found"),
@@ -175,10 +172,7 @@ fn sg_shadow_maps_without_an_adapter_fail_clearly_or_fall_back() {
     let auto = run("auto");
     let stderr = String::from_utf8_lossy(&auto.stderr);
     assert_eq!(auto.status.code(), Some(0), "{stderr}");
-    let notices: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("notice:"))
-        .collect();
+    let notices = common::notices(&stderr);
     assert_eq!(notices.len(), 1, "{stderr}");
     assert!(
         notices[0].starts_with("notice: shadow maps made on the CPU: no GPU"),

@@ -105,28 +105,25 @@ fn render_computes_direct_light_on_the_gpu_when_asked_and_says_so() {
     let Some(_gpu) = common::gpu() else { return };
     let dir = tempfile::tempdir().unwrap();
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml");
-    let run = |visibility: &str| -> serde_json::Value {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
-            .args([
-                "render",
-                scene,
+    let run = |visibility: &str| {
+        common::render_cli(
+            dir.path(),
+            scene,
+            visibility,
+            &[
                 "--method",
                 "sg",
                 "--visibility",
                 visibility,
-            ])
-            .args(["--device", "gpu", "--width", "16", "--spp", "1", "--quiet"])
-            .arg("--output")
-            .arg(dir.path().join(format!("{visibility}.exr")))
-            .env("XDG_RUNTIME_DIR", dir.path())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-        assert_eq!(out.status.code(), Some(0), "{stderr}");
-        serde_json::from_str(
-            &std::fs::read_to_string(dir.path().join(format!("{visibility}.json"))).unwrap(),
+                "--device",
+                "gpu",
+                "--width",
+                "16",
+                "--spp",
+                "1",
+            ],
         )
-        .unwrap()
+        .1
     };
     let log = run("vsm");
     let on = log["sg"]["direct_on"].as_str().unwrap_or_default();

@@ -69,21 +69,27 @@ fn render_shades_on_the_gpu_when_asked_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml");
     let run = |name: &str, cut: &str| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
-            .args(["render", scene, "--method", "sg", "--visibility", "approx"])
-            .args(["--cut", cut, "--node-maps", "500", "--device", "gpu"])
-            .args(["--width", "16", "--spp", "1", "--quiet", "--output"])
-            .arg(dir.path().join(format!("{name}.exr")))
-            .env("XDG_RUNTIME_DIR", dir.path())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-        assert_eq!(out.status.code(), Some(0), "{stderr}");
-        let log: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.path().join(format!("{name}.json"))).unwrap(),
+        common::render_cli(
+            dir.path(),
+            scene,
+            name,
+            &[
+                "--method",
+                "sg",
+                "--visibility",
+                "approx",
+                "--cut",
+                cut,
+                "--node-maps",
+                "500",
+                "--device",
+                "gpu",
+                "--width",
+                "16",
+                "--spp",
+                "1",
+            ],
         )
-        .unwrap();
-        (stderr, log)
     };
     let (stderr, log) = run("vertex", "vertex");
     assert!(!stderr.contains("notice:"), "{stderr}");
@@ -94,10 +100,7 @@ fn render_shades_on_the_gpu_when_asked_and_says_so() {
     assert!(uploads[0]["nodes"].as_u64().unwrap() > 0);
 
     let (stderr, log) = run("pixel", "pixel");
-    let notices: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("notice:"))
-        .collect();
+    let notices = common::notices(&stderr);
     assert_eq!(notices.len(), 1, "{stderr}");
     assert!(notices[0].contains("only with --cut vertex"), "{stderr}");
     assert!(log["sg"].get("shading_on").is_none(), "{}", log["sg"]);

@@ -85,28 +85,23 @@ fn render_sums_the_vpls_on_the_gpu_when_asked_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml");
     let run = |visibility: &str| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
-            .args([
-                "render",
-                scene,
+        common::render_cli(
+            dir.path(),
+            scene,
+            visibility,
+            &[
                 "--method",
                 "vpl",
                 "--visibility",
                 visibility,
-            ])
-            .args(["--device", "gpu", "--width", "16", "--spp", "1", "--quiet"])
-            .arg("--output")
-            .arg(dir.path().join(format!("{visibility}.exr")))
-            .env("XDG_RUNTIME_DIR", dir.path())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-        assert_eq!(out.status.code(), Some(0), "{stderr}");
-        let log: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.path().join(format!("{visibility}.json"))).unwrap(),
+                "--device",
+                "gpu",
+                "--width",
+                "16",
+                "--spp",
+                "1",
+            ],
         )
-        .unwrap();
-        (stderr, log)
     };
     let (stderr, log) = run("approx");
     assert!(!stderr.contains("notice:"), "{stderr}");
@@ -118,10 +113,7 @@ fn render_sums_the_vpls_on_the_gpu_when_asked_and_says_so() {
     assert!(tm.starts_with("gpu ("), "{tm}");
 
     let (stderr, log) = run("vsm");
-    let notices: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("notice:"))
-        .collect();
+    let notices = common::notices(&stderr);
     assert_eq!(notices.len(), 1, "{stderr}");
     assert!(
         notices[0].contains("only with --visibility approx"),

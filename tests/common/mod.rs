@@ -56,3 +56,39 @@ pub fn scene_and_accel(name: &str) -> (interreflect::scene::Scene, interreflect:
     let accel = interreflect::accel::Accel::build(&scene.mesh.positions, &scene.mesh.indices);
     (scene, accel)
 }
+
+/// `interreflect render SCENE ARGS --quiet --output DIR/NAME.exr` with a private
+/// `XDG_RUNTIME_DIR`, for the tests that run the renderer as a user does: checks that it exits
+/// 0 and returns its stderr and its JSON log.
+#[allow(dead_code)] // Not every test binary that shares this module runs the CLI.
+pub fn render_cli(
+    dir: &std::path::Path,
+    scene: &str,
+    name: &str,
+    args: &[&str],
+) -> (String, serde_json::Value) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
+        .arg("render")
+        .arg(scene)
+        .args(args)
+        .args(["--quiet", "--output"])
+        .arg(dir.join(format!("{name}.exr")))
+        .env("XDG_RUNTIME_DIR", dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let log =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap())
+            .unwrap();
+    (stderr, log)
+}
+
+/// The `notice:` lines of a run's stderr.
+#[allow(dead_code)]
+pub fn notices(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("notice:"))
+        .collect()
+}

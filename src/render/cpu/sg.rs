@@ -158,6 +158,45 @@ impl Tally {
     }
 }
 
+/// The primary hit of sample `s` of `spp` in pixel `pixel` (row-major, `camera.width` wide).
+pub(crate) fn primary_hit(
+    accel: &Accel,
+    camera: &crate::scene::Camera,
+    spp: u32,
+    seed: u64,
+    pixel: usize,
+    s: u32,
+) -> Option<Hit> {
+    let w = camera.width as usize;
+    let o = sample_offset(spp, s, seed, pixel as u64);
+    let dir = camera.ray_dir((pixel % w) as f32 + o.x, (pixel / w) as f32 + o.y);
+    accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
+}
+
+/// Every sample's primary hit, pixel after pixel (`spp` per pixel).
+pub(crate) fn primary_hits(
+    accel: &Accel,
+    camera: &crate::scene::Camera,
+    spp: u32,
+    seed: u64,
+) -> Vec<Option<Hit>> {
+    let spp = spp.max(1);
+    let n = camera.width as usize * camera.height as usize * spp as usize;
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            primary_hit(
+                accel,
+                camera,
+                spp,
+                seed,
+                i / spp as usize,
+                (i % spp as usize) as u32,
+            )
+        })
+        .collect()
+}
+
 /// Sub-pixel position of sample `s` of `spp` in pixel `pixel`.
 pub(crate) fn sample_offset(spp: u32, s: u32, seed: u64, pixel: u64) -> Vec2 {
     if spp == 1 {
@@ -310,15 +349,7 @@ pub fn render_sg(
     let spp = opts.spp as usize;
     // Primary hits of every sample.
     let t = Instant::now();
-    let hits: Vec<Option<Hit>> = (0..n_px * spp)
-        .into_par_iter()
-        .map(|i| {
-            let (p, s) = (i / spp, i % spp);
-            let o = sample_offset(opts.spp, s as u32, opts.seed, p as u64);
-            let dir = camera.ray_dir((p % w) as f32 + o.x, (p / w) as f32 + o.y);
-            accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
-        })
-        .collect();
+    let hits = primary_hits(accel, &camera, opts.spp, opts.seed);
     stats.seconds.primary = t.elapsed().as_secs_f64();
     if progress.cancel.load(Ordering::Relaxed) {
         return None;

@@ -23,7 +23,9 @@
 //! (docs/gpu.md).
 
 use super::reference::Progress;
-use super::sg::{direct_light, direct_on_gpu, light_fraction, sample_offset, shadow_maps};
+use super::sg::{
+    direct_light, direct_on_gpu, light_fraction, primary_hit, primary_hits, shadow_maps,
+};
 use super::surface::{SurfacePoint, gpu_points, ray_epsilon, scatter};
 use crate::accel::{Accel, Hit};
 use crate::brdf::Brdf;
@@ -243,18 +245,7 @@ pub fn render_vpl(
     // The stages on the GPU (--device gpu): primary hits cast first, for every sample; then the
     // one-bounce sum (with `approx`) and the direct light (with a shadow map for every light).
     let t = Instant::now();
-    let hits: Option<Vec<Option<Hit>>> = (opts.device == Device::Gpu).then(|| {
-        (0..opts.width as usize * opts.height as usize * spp as usize)
-            .into_par_iter()
-            .map(|i| {
-                let (pixel, s) = (i / spp as usize, (i % spp as usize) as u32);
-                let o = sample_offset(spp, s, opts.seed, pixel as u64);
-                let (x, y) = (pixel % w, pixel / w);
-                let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
-                accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
-            })
-            .collect()
-    });
+    let hits = (opts.device == Device::Gpu).then(|| primary_hits(accel, &camera, spp, opts.seed));
     let mut gpu_sums: Option<Vec<VplShaded>> = None;
     if opts.indirect {
         stats.indirect_on = "cpu".into();
@@ -303,11 +294,7 @@ pub fn render_vpl(
                 let i = pixel as usize * spp as usize + s as usize;
                 let hit = match &hits {
                     Some(h) => h[i],
-                    None => {
-                        let o = sample_offset(spp, s, opts.seed, pixel);
-                        let dir = camera.ray_dir(x as f32 + o.x, y as f32 + o.y);
-                        accel.intersect(camera.position, dir, 0.0, f32::INFINITY)
-                    }
+                    None => primary_hit(accel, &camera, spp, opts.seed, pixel as usize, s),
                 };
                 let direct = gpu_direct.as_ref().map(|g| g[i]);
                 let indirect = match &gpu_sums {

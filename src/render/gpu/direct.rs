@@ -8,7 +8,7 @@ use super::layout::{GpuBrdf, GpuDirectParams, GpuLight, GpuShadowMap, GpuSurface
 use super::{Gpu, GpuError, describe, f32s};
 use crate::brdf::Brdf;
 use crate::scene::Light;
-use crate::visibility::vsm::VarianceShadowMap;
+use crate::visibility::vsm::{ShadowMapParts, VarianceShadowMap};
 use glam::Vec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use wgpu::util::DeviceExt;
@@ -24,9 +24,9 @@ fn failed(reason: impl Into<String>) -> GpuError {
 }
 
 impl GpuShadowMap {
-    /// `map`, its moments starting at texel `first_texel` of the shared moments buffer.
-    pub fn new(map: &VarianceShadowMap, first_texel: u32) -> GpuShadowMap {
-        let p = map.parts();
+    /// A map (`VarianceShadowMap::parts`), its moments starting at texel `first_texel` of the
+    /// shared moments buffer.
+    pub(crate) fn new(p: &ShadowMapParts, first_texel: u32) -> GpuShadowMap {
         let mut g = GpuShadowMap {
             origin: p.origin.to_array(),
             projection: p.projection,
@@ -78,9 +78,10 @@ pub fn direct(
             if moments.len() > u32::MAX as usize {
                 return Err(failed("the shadow maps hold more than 2^32 texels"));
             }
+            let parts = m.parts();
             gpu_lights[k].map = gpu_maps.len() as u32;
-            gpu_maps.push(GpuShadowMap::new(m, moments.len() as u32));
-            moments.extend(m.parts().moments.iter().map(|t| t.to_array()));
+            gpu_maps.push(GpuShadowMap::new(&parts, moments.len() as u32));
+            moments.extend(parts.moments.iter().map(|t| t.to_array()));
         }
     }
     // Empty buffers cannot be bound: one unused map and texel without maps.
