@@ -46,7 +46,7 @@ for size in ${SIZES:-11k 48k 202k 871k}; do
       sg-vertex) args=(--method sg --visibility exact --cut vertex) ;;
       sg-vsm) args=(--method sg --visibility vsm --device cpu --cut pixel) ;;
       sg-approx) args=(--method sg --visibility approx --device cpu --cut pixel) ;;
-      sg-brute) args=(--method sg-brute); size_args=(--width 16 --height 12 --spp 1) ;;
+      sg-brute) args=(--method sg-brute --visibility exact); size_args=(--width 16 --height 12 --spp 1) ;;
       prt-cpu) args=(--method prt --device cpu --no-cache); s="$prt" ;;
       prt-gpu) args=(--method prt --device gpu --no-cache); s="$prt" ;;
     esac

@@ -69,7 +69,7 @@ for scene in ${SCENES:-ring bunny dragon}; do
       done
       if [ "$light" = sun ]; then
         echo "== $name sg"
-        "$bin" render "$toml" --method sg --width "$width" --spp 4 --output "$out/$name-sg.exr" \
+        "$bin" render "$toml" --method sg --visibility exact --width "$width" --spp 4 --output "$out/$name-sg.exr" \
           --quiet
         "$bin" compare "$out/$name-sg.exr" "$out/$name-reference.exr" --json \
           --error-map "$out/$name-sg-error.png" > "$out/$name-sg-metrics.json"

@@ -32,9 +32,9 @@ for scene in ring bunny dragon; do
     > "$out/$scene-reference-noise.json"
   for method in sg sg-vertex sg-brute; do
     case $method in
-      sg) args=(--method sg --cut pixel) ;;
-      sg-vertex) args=(--method sg --cut vertex) ;;
-      sg-brute) args=(--method sg-brute) ;;
+      sg) args=(--method sg --visibility exact --cut pixel) ;;
+      sg-vertex) args=(--method sg --visibility exact --cut vertex) ;;
+      sg-brute) args=(--method sg-brute --visibility exact) ;;
     esac
     # Brute force on the 202k dragon at 64 px would take an hour: measured at 32 px below.
     if [ "$scene" = dragon ] && [ "$method" = sg-brute ]; then continue; fi
@@ -51,10 +51,10 @@ for scene in ring bunny dragon; do
   done
 done
 echo "== dragon sg vs sg-brute (32 px, 1 spp)"
-"$bin" render scenes/dragon.toml --method sg --indirect-only --width 32 --spp 1 \
+"$bin" render scenes/dragon.toml --method sg --visibility exact --indirect-only --width 32 --spp 1 \
   --output "$out/dragon32-sg.exr" --quiet
 if [ "${KEEP_BRUTE:-0}" != 1 ] || [ ! -f "$out/dragon32-sg-brute.exr" ]; then
-  "$bin" render scenes/dragon.toml --method sg-brute --indirect-only --width 32 --spp 1 \
+  "$bin" render scenes/dragon.toml --method sg-brute --visibility exact --indirect-only --width 32 --spp 1 \
     --output "$out/dragon32-sg-brute.exr" --quiet
 fi
 "$bin" compare "$out/dragon32-sg.exr" "$out/dragon32-sg-brute.exr" --json \
@@ -67,7 +67,7 @@ for size in 11k 48k 202k 871k; do
     continue
   fi
   echo "== frame time, dragon $size"
-  "$bin" render "$scene" --method sg --indirect-only --width 64 --spp 1 \
+  "$bin" render "$scene" --method sg --visibility exact --indirect-only --width 64 --spp 1 \
     --output "$out/scaling-$size.exr" --quiet
 done
 python3 - "$out" <<'PY'

@@ -723,6 +723,8 @@ fn environment_maps() {
             "--quiet",
             "--method",
             "sg",
+            "--visibility",
+            "exact",
             "--output",
             "<dir>/out.exr",
         ],

@@ -1088,11 +1088,17 @@ fn every_method_is_bit_identical_across_threads_and_runs() {
     let configs: [(&str, &[&str]); 11] = [
         ("reference", &["--method", "reference"]),
         ("direct", &["--method", "direct"]),
-        ("sg exact", &["--method", "sg"]),
-        ("sg vertex cuts", &["--method", "sg", "--cut", "vertex"]),
+        ("sg exact", &["--method", "sg", "--visibility", "exact"]),
+        (
+            "sg vertex cuts",
+            &["--method", "sg", "--visibility", "exact", "--cut", "vertex"],
+        ),
         ("sg vsm", &["--method", "sg", "--visibility", "vsm"]),
         ("sg approx", &["--method", "sg", "--visibility", "approx"]),
-        ("sg-brute", &["--method", "sg-brute"]),
+        (
+            "sg-brute exact",
+            &["--method", "sg-brute", "--visibility", "exact"],
+        ),
         (
             "sg-brute vsm",
             &["--method", "sg-brute", "--visibility", "vsm"],
@@ -1101,7 +1107,7 @@ fn every_method_is_bit_identical_across_threads_and_runs() {
             "prt cpu",
             &["--method", "prt", "--device", "cpu", "--no-cache"],
         ),
-        ("vpl", &["--method", "vpl"]),
+        ("vpl exact", &["--method", "vpl", "--visibility", "exact"]),
         ("vpl approx", &["--method", "vpl", "--visibility", "approx"]),
     ];
     for (label, args) in configs {

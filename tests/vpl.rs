@@ -2,6 +2,8 @@
 //! estimate of the one-bounce light, so on a Lambertian scene (where 4000 VPLs are smooth
 //! enough) its image must agree with the path tracer's; the clamp only removes light.
 
+mod common;
+
 use interreflect::accel::Accel;
 use interreflect::compare::metrics;
 use interreflect::image::Image;
@@ -122,5 +124,32 @@ fn unclamped_vpls_agree_with_the_reference_on_a_lambertian_corner() {
     assert!(mean(&clamped) < means[0], "the clamp added light");
     for (c, u) in clamped.data.iter().zip(&images[0].data) {
         assert!(c.cmple(*u + 1e-6).all(), "clamped {c} above unclamped {u}");
+    }
+}
+
+/// `render`'s default visibility for sg, sg-brute and vpl is the approximate one (the paper's:
+/// shadow maps and visibility maps, no shadow rays between reflectors and receivers), and
+/// `--visibility exact` still selects the shadow rays; the JSON log says which ran.
+#[test]
+fn render_defaults_to_approximate_visibility() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml");
+    let small = ["--device", "cpu", "--width", "16", "--spp", "1", "--vpls", "16"];
+    for (method, section) in [("sg", "sg"), ("sg-brute", "sg"), ("vpl", "vpl")] {
+        for (extra, expected) in [(&[][..], "approx"), (&["--visibility", "exact"][..], "exact")] {
+            let args: Vec<&str> = ["--method", method]
+                .iter()
+                .chain(&small)
+                .chain(extra)
+                .copied()
+                .collect();
+            let name = format!("{method}-{expected}");
+            let (_, log) = common::render_cli(dir.path(), scene, &name, &args);
+            assert_eq!(
+                log[section]["visibility"], expected,
+                "{method} {extra:?}: {}",
+                log[section]
+            );
+        }
     }
 }

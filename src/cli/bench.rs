@@ -144,6 +144,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
                 scene,
                 "--method",
                 "sg",
+                "--visibility",
+                "exact",
                 "--indirect-only",
                 "--width",
                 w,
@@ -168,7 +170,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
     let _ = writeln!(md, "## Tree build and frame time against triangle count\n");
     let _ = writeln!(
         md,
-        "`render <dragon> --method sg --indirect-only --width {w} --spp 1`: the default cut (1 %, \
+        "`render <dragon> --method sg --visibility exact --indirect-only --width {w} --spp 1`: the default cut (1 %, \
          1000 nodes), exact visibility, floor and wall included in the reflectors.\n"
     );
     let _ = writeln!(
@@ -265,13 +267,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
             &exe,
             &work,
             &format!("cut-{stem}"),
-            &[&common[..], &["--method", "sg"]].concat(),
+            &[&common[..], &["--method", "sg", "--visibility", "exact"]].concat(),
         )?;
         let bf = render(
             &exe,
             &work,
             &format!("brute-{stem}"),
-            &[&common[..], &["--method", "sg-brute"]].concat(),
+            &[
+                &common[..],
+                &["--method", "sg-brute", "--visibility", "exact"],
+            ]
+            .concat(),
         )?;
         let (ts, tb) = (
             f(&sg.log, &["sg", "seconds", "shading"]),

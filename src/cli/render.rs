@@ -29,10 +29,11 @@ pub struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value_t = Method::Reference)]
     pub method: Method,
-    /// Visibility for sg / sg-brute (exact: shadow rays through the BVH; vsm: variance shadow
-    /// maps for the light; approx: those and visibility maps at the reflector tree's nodes
-    /// between reflectors and receivers; settings in the scene's [visibility]).
-    #[arg(long, value_enum, default_value_t = Visibility::Exact)]
+    /// Visibility for sg, sg-brute and vpl (approx: variance shadow maps for the light and
+    /// visibility maps at the reflector tree's nodes between reflectors and receivers, the
+    /// paper's kind; vsm: the shadow maps, and shadow rays between reflectors and receivers;
+    /// exact: shadow rays through the BVH, the oracle; settings in the scene's [visibility]).
+    #[arg(long, value_enum, default_value_t = Visibility::Approx)]
     pub visibility: Visibility,
     /// Where sg selects cuts (default: the scene's methods.sg.cut).
     #[arg(long, value_enum)]

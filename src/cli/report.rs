@@ -467,7 +467,7 @@ fn report_scene(
                         family: Family::SgBrute,
                         param: None,
                         default: true,
-                        args: vec![],
+                        args: vec!["--visibility".into(), "exact".into()],
                     },
                 );
             } else {

@@ -95,6 +95,13 @@ impl Family {
         }
     }
 
+    /// Whether its runs pass `--visibility exact`: the reports measure sg, sg-brute and vpl
+    /// with shadow rays, so that their errors are those of the transport and of the cut, not
+    /// of the approximate visibility (`render`'s default, measured in `results/visibility.md`).
+    pub fn pins_exact_visibility(self) -> bool {
+        matches!(self, Family::Sg | Family::SgBrute | Family::Vpl)
+    }
+
     /// Whether its error keeps falling as 1/√time with more time (unbiased Monte Carlo), so
     /// that equal quality may be extrapolated beyond the measured runs.
     fn converges_as_monte_carlo(self) -> bool {
@@ -264,6 +271,9 @@ pub fn plan(s: &Settings, d: Defaults) -> Vec<RunSpec> {
         let (_, flag) = f.parameter().expect("a swept family has a parameter");
         for v in sweep(values, default) {
             let mut args = vec![flag.to_string(), v.to_string()];
+            if f.pins_exact_visibility() {
+                args.extend(["--visibility".into(), "exact".into()]);
+            }
             if f == Family::PathTracing {
                 // A different seed from the reference's: independent noise.
                 args.extend(["--seed".into(), (s.reference_seed + 1).to_string()]);
@@ -782,7 +792,9 @@ pub fn summary(reports: &[SceneReport], pages: &[(String, String)]) -> String {
     let _ = writeln!(
         o,
         "What the methods are here: **sg** is the spherical-Gaussian method on the CPU, with \
-         exact visibility (shadow rays to every cut node; its GPU pipeline is not built yet); \
+         exact visibility (`--visibility exact`: shadow rays to every cut node, so that its \
+         error is the transport's and the cut's; `render`'s default, the approximate \
+         visibility, adds 10–14 %: [`visibility.md`](visibility.md)); \
          **path tracing** is the reference's own estimator (BRDF sampling, reflector sampling \
          and light tracing under MIS) run for less time; **vpl** is instant radiosity with \
          clamped virtual point lights and shadow rays; **prt** is SH diffuse precomputed \

@@ -4,6 +4,7 @@ use interreflect::render::gpu::{Gpu, adapter_required};
 
 /// The GPU for a GPU test: `None` (the test skips, with a note) when no adapter exists, unless
 /// `CI=true` asks for one, in which case the test fails.
+#[allow(dead_code)] // The CPU-only test binaries that share this module need no GPU.
 pub fn gpu() -> Option<Gpu> {
     match Gpu::new() {
         Ok(g) => Some(g),
