@@ -23,6 +23,8 @@
 //! - [`report`]: the comparison reports of `interreflect report` (planning, interpolation,
 //!   markdown).
 //! - [`memory`]: the memory budget and the estimate of a render's peak memory.
+//! - [`viewer`]: the interactive viewer's state, camera controller, scripts and frames (the
+//!   window itself is `interreflect view`, in the binary).
 #![forbid(unsafe_code)]
 // `!(x > 0.0)` is written on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -42,4 +44,5 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod transport;
+pub mod viewer;
 pub mod visibility;

@@ -134,9 +134,14 @@ fn unclamped_vpls_agree_with_the_reference_on_a_lambertian_corner() {
 fn render_defaults_to_approximate_visibility() {
     let dir = tempfile::tempdir().unwrap();
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml");
-    let small = ["--device", "cpu", "--width", "16", "--spp", "1", "--vpls", "16"];
+    let small = [
+        "--device", "cpu", "--width", "16", "--spp", "1", "--vpls", "16",
+    ];
     for (method, section) in [("sg", "sg"), ("sg-brute", "sg"), ("vpl", "vpl")] {
-        for (extra, expected) in [(&[][..], "approx"), (&["--visibility", "exact"][..], "exact")] {
+        for (extra, expected) in [
+            (&[][..], "approx"),
+            (&["--visibility", "exact"][..], "exact"),
+        ] {
             let args: Vec<&str> = ["--method", method]
                 .iter()
                 .chain(&small)

@@ -21,6 +21,7 @@ mod render;
 mod report;
 mod sh_irradiance;
 mod single_triangle;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -71,6 +72,9 @@ pub enum Command {
     /// brute force, the SG integral against the machine's exp, the reference's paths per
     /// second, GPU against its CPU twin; writes RESULTS/bench.md (docs/bench.md).
     Bench(bench::BenchArgs),
+    /// The interactive viewer: a window with the image, an egui panel (method, light,
+    /// materials, overlays, stats), camera controls, screenshots and scripts (docs/viewer.md).
+    View(view::ViewArgs),
 }
 
 /// Writes `text` to standard output; a closed pipe (`interreflect info ... | head`) is not an
@@ -101,5 +105,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::ExportMitsuba(a) => mitsuba::run(a),
         Command::Report(a) => report::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::View(a) => view::run(a),
     }
 }

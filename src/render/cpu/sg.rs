@@ -131,6 +131,14 @@ pub struct SgStats {
     pub node_maps: usize,
     pub nonfinite_samples: u64,
     pub seconds: SgTimes,
+    /// Whether the light stage was the previous frame's ([`render_sg_prepared`]); not in the
+    /// JSON log.
+    #[serde(skip)]
+    pub light_stage_kept: bool,
+    /// Mean cut size of each pixel's samples (row-major), for the viewer's heatmap; zeros with
+    /// vertex cuts, which are selected before the pixels are shaded. Not in the JSON log.
+    #[serde(skip)]
+    pub pixel_cut_sizes: Vec<f32>,
 }
 
 #[derive(Default)]
@@ -145,8 +153,15 @@ struct Tally {
     bad: AtomicU64,
 }
 
+thread_local! {
+    /// Cut nodes selected on this thread so far: the pixel loop reads it before and after a
+    /// pixel for the per-pixel cut sizes (`SgStats::pixel_cut_sizes`).
+    static THREAD_CUT_NODES: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
 impl Tally {
     fn add_cut(&self, size: usize, c: &CutCounters) {
+        THREAD_CUT_NODES.with(|n| n.set(n.get() + size as u64));
         self.cuts.fetch_add(1, Ordering::Relaxed);
         self.cut_size_sum.fetch_add(size as u64, Ordering::Relaxed);
         self.cut_size_max.fetch_max(size as u64, Ordering::Relaxed);
@@ -227,19 +242,141 @@ pub fn render_sg(
     opts: &SgOptions,
     progress: &Progress,
 ) -> Option<(Image, SgStats)> {
-    let mut stats = SgStats::default();
-    let eps = ray_epsilon(scene);
-    let t = Instant::now();
-    let pieces = if opts.indirect {
-        reflector_pieces(scene, opts.max_edge)
-    } else {
-        Vec::new()
-    };
-    let tree = build_tree(scene, &pieces);
-    stats.seconds.tree = t.elapsed().as_secs_f64();
+    let mut prepared = SgPrepared::build(scene, opts);
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
     }
+    render_sg_prepared(scene, accel, opts, &mut prepared, progress)
+}
+
+/// What `sg` computes before it sees the camera, kept between frames
+/// ([`render_sg_prepared`]):
+/// - the reflector pieces and their tree, which depend on the geometry, the materials'
+///   albedos and `max_edge`, not on the lights or the camera;
+/// - the last frame's light stage (shadow maps, the lit tree, the visibility maps), which
+///   depends on the lights and the visibility settings, not on the camera: a frame from a new
+///   viewpoint under the same light reuses it.
+pub struct SgPrepared {
+    pieces: Vec<ReflectorPiece>,
+    tree: ReflectorTree,
+    max_edge: f32,
+    indirect: bool,
+    /// Time the pieces and the tree took.
+    pub seconds: f64,
+    light_stage: Option<LightStage>,
+}
+
+/// The light stage of a frame, owned (a [`LitScene`] borrows the tree it lights).
+struct LightStage {
+    /// What it was computed for: the lights and every setting it depends on.
+    key: String,
+    maps: Vec<Option<VarianceShadowMap>>,
+    shadow_maps_on: String,
+    lit: Vec<(
+        Vec<LitTriangle>,
+        Vec<crate::cut::LitNode>,
+        Vec3,
+        ReceiverOptions,
+    )>,
+    vpl_vis: Vec<Option<ApproxVisibility>>,
+}
+
+impl SgPrepared {
+    pub fn build(scene: &Scene, opts: &SgOptions) -> SgPrepared {
+        let t = Instant::now();
+        let pieces = if opts.indirect {
+            reflector_pieces(scene, opts.max_edge)
+        } else {
+            Vec::new()
+        };
+        let tree = build_tree(scene, &pieces);
+        SgPrepared {
+            pieces,
+            tree,
+            max_edge: opts.max_edge,
+            indirect: opts.indirect,
+            seconds: t.elapsed().as_secs_f64(),
+            light_stage: None,
+        }
+    }
+
+    /// Whether it was built for these options (the same `max_edge`, and pieces when the
+    /// indirect light is wanted).
+    pub fn fits(&self, opts: &SgOptions) -> bool {
+        self.max_edge.to_bits() == opts.max_edge.to_bits() && (self.indirect || !opts.indirect)
+    }
+
+    /// Number of nodes of the tree.
+    pub fn tree_nodes(&self) -> usize {
+        self.tree.nodes.len()
+    }
+
+    /// The bounding boxes (min, max) of the tree's nodes `depth` levels below the root (and of
+    /// the leaves above that depth), for drawing the tree over the image.
+    pub fn node_boxes(&self, depth: u32) -> Vec<(Vec3, Vec3)> {
+        let mut out = Vec::new();
+        if self.tree.is_empty() {
+            return out;
+        }
+        let mut stack = vec![(0u32, 0u32)];
+        while let Some((n, d)) = stack.pop() {
+            let node = &self.tree.nodes[n as usize];
+            match node.children {
+                Some([l, r]) if d < depth => {
+                    stack.push((l, d + 1));
+                    stack.push((r, d + 1));
+                }
+                _ => {
+                    let (mut lo, mut hi) =
+                        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                    let range = node.first as usize..(node.first + node.count) as usize;
+                    for &t in &self.tree.tri_order[range] {
+                        for v in self.pieces[t as usize].vertices {
+                            lo = lo.min(v);
+                            hi = hi.max(v);
+                        }
+                    }
+                    out.push((lo, hi));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// [`render_sg`] from pieces and a tree built before (`prepared`, which must fit `opts`;
+/// otherwise they are built afresh), reusing its light stage when the lights and settings are
+/// those of its last frame (`stats.light_stage_kept`; the stage's times are then 0);
+/// `seconds.tree` is the time the pieces and tree took when they were built. The image is
+/// the same as [`render_sg`]'s, bit for bit.
+pub fn render_sg_prepared(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &SgOptions,
+    prepared: &mut SgPrepared,
+    progress: &Progress,
+) -> Option<(Image, SgStats)> {
+    if !prepared.fits(opts) {
+        return render_sg(scene, accel, opts, progress);
+    }
+    let mut stats = SgStats::default();
+    let eps = ray_epsilon(scene);
+    let key = format!(
+        "{:?}",
+        (
+            &scene.lights,
+            opts.visibility,
+            opts.device,
+            opts.seed,
+            opts.indirect,
+            &scene.settings.vsm,
+            &scene.settings.ism,
+            scene.settings.vpl_count,
+        )
+    );
+    let kept = prepared.light_stage.take().filter(|s| s.key == key);
+    let (pieces, tree) = (&prepared.pieces, &prepared.tree);
+    stats.seconds.tree = prepared.seconds;
     stats.reflector_triangles = scene
         .objects
         .iter()
@@ -250,99 +387,147 @@ pub fn render_sg(
     stats.tree_nodes = tree.nodes.len();
     let brute = opts.brute || !tree::needs_tree(tree.tri_order.len());
 
-    // Shadow maps (`--visibility vsm`), one per light.
-    let t = Instant::now();
-    let (maps, place) = shadow_maps(scene, accel, opts.visibility, opts.device);
-    stats.shadow_maps_on = place;
-    stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
-
-    // Light every reflector piece, per light (shadow rays or the shadow map at four points).
-    let t = Instant::now();
-    let rx_opts = ReceiverOptions::default();
-    let lits: Vec<LitScene> = if opts.indirect && !tree.is_empty() {
-        scene
-            .lights
-            .iter()
-            .zip(&maps)
-            .map(|(light, map)| {
-                light_scene(
-                    scene,
-                    accel,
-                    &pieces,
-                    &tree,
-                    light,
-                    map.as_ref(),
-                    eps,
-                    rx_opts,
-                )
+    let (maps, lits, vpl_vis) = if let Some(k) = kept {
+        stats.light_stage_kept = true;
+        stats.shadow_maps_on = k.shadow_maps_on;
+        let lits: Vec<LitScene> = k
+            .lit
+            .into_iter()
+            .map(|(tris, nodes, light_pos, receiver)| LitScene {
+                tree,
+                tris,
+                nodes,
+                light_pos,
+                receiver,
             })
-            .collect()
+            .collect();
+        (k.maps, lits, k.vpl_vis)
     } else {
-        Vec::new()
-    };
-    stats.seconds.lighting = t.elapsed().as_secs_f64();
-    if progress.cancel.load(Ordering::Relaxed) {
-        return None;
-    }
+        // Shadow maps (`--visibility vsm`), one per light.
+        let t = Instant::now();
+        let (maps, place) = shadow_maps(scene, accel, opts.visibility, opts.device);
+        stats.shadow_maps_on = place;
+        stats.seconds.shadow_maps = t.elapsed().as_secs_f64();
 
-    // The visibility maps between reflectors and receivers (`--visibility approx`), per light:
-    // at the tree's nodes, or (`node_maps = 0`) the VPLs' imperfect shadow maps.
-    let t = Instant::now();
-    let ism = &scene.settings.ism;
-    let vpl_vis: Vec<Option<ApproxVisibility>> =
-        if opts.visibility != Visibility::Approx || lits.is_empty() {
-            Vec::new()
-        } else if ism.node_maps > 0 {
-            let far = 2.0 * scene.mesh.diagonal().max(1e-3);
-            lits.iter()
-                .map(|lit| {
-                    Some(ApproxVisibility::Nodes(NodeMaps::build(
-                        accel,
-                        lit,
-                        ism.node_maps as usize,
-                        ism.resolution,
-                        ism.bias,
-                        eps,
-                        far,
-                    )))
-                })
-                .collect()
-        } else {
-            let sources = vpl::sources(scene);
+        // Light every reflector piece, per light (shadow rays or the shadow map at four points).
+        let t = Instant::now();
+        let rx_opts = ReceiverOptions::default();
+        let lits: Vec<LitScene> = if opts.indirect && !tree.is_empty() {
             scene
                 .lights
                 .iter()
                 .zip(&maps)
-                .enumerate()
-                .map(|(k, (light, map))| {
-                    let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
-                    let vpls = vpl::generate(
-                        &sources,
-                        light,
-                        scene.settings.vpl_count as usize,
-                        opts.seed ^ k as u64,
-                        &visible,
-                    );
-                    Some(ApproxVisibility::nearest_vpls(
+                .map(|(light, map)| {
+                    light_scene(
                         scene,
-                        &tree,
-                        &pieces,
-                        &vpls,
-                        opts.seed ^ k as u64,
-                    ))
+                        accel,
+                        pieces,
+                        tree,
+                        light,
+                        map.as_ref(),
+                        eps,
+                        rx_opts,
+                    )
                 })
                 .collect()
+        } else {
+            Vec::new()
         };
-    stats.seconds.vpls = t.elapsed().as_secs_f64();
+        stats.seconds.lighting = t.elapsed().as_secs_f64();
+        if progress.cancel.load(Ordering::Relaxed) {
+            return None;
+        }
+
+        // The visibility maps between reflectors and receivers (`--visibility approx`), per light:
+        // at the tree's nodes, or (`node_maps = 0`) the VPLs' imperfect shadow maps.
+        let t = Instant::now();
+        let ism = &scene.settings.ism;
+        let vpl_vis: Vec<Option<ApproxVisibility>> =
+            if opts.visibility != Visibility::Approx || lits.is_empty() {
+                Vec::new()
+            } else if ism.node_maps > 0 {
+                let far = 2.0 * scene.mesh.diagonal().max(1e-3);
+                lits.iter()
+                    .map(|lit| {
+                        Some(ApproxVisibility::Nodes(NodeMaps::build(
+                            accel,
+                            lit,
+                            ism.node_maps as usize,
+                            ism.resolution,
+                            ism.bias,
+                            eps,
+                            far,
+                        )))
+                    })
+                    .collect()
+            } else {
+                let sources = vpl::sources(scene);
+                scene
+                    .lights
+                    .iter()
+                    .zip(&maps)
+                    .enumerate()
+                    .map(|(k, (light, map))| {
+                        let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
+                        let vpls = vpl::generate(
+                            &sources,
+                            light,
+                            scene.settings.vpl_count as usize,
+                            opts.seed ^ k as u64,
+                            &visible,
+                        );
+                        Some(ApproxVisibility::nearest_vpls(
+                            scene,
+                            tree,
+                            pieces,
+                            &vpls,
+                            opts.seed ^ k as u64,
+                        ))
+                    })
+                    .collect()
+            };
+        stats.seconds.vpls = t.elapsed().as_secs_f64();
+        (maps, lits, vpl_vis)
+    };
     stats.node_maps = vpl_vis
         .iter()
         .flatten()
         .map(ApproxVisibility::node_maps)
         .sum();
-    if progress.cancel.load(Ordering::Relaxed) {
-        return None;
-    }
+    let shadow_maps_on = stats.shadow_maps_on.clone();
+    let result = shade_frame(
+        scene, accel, opts, eps, tree, brute, &lits, &maps, &vpl_vis, stats, progress,
+    );
+    // The light stage is kept even when the frame was cancelled: the next frame (often the
+    // one that cancelled it, from another viewpoint) can use it.
+    prepared.light_stage = Some(LightStage {
+        key,
+        maps,
+        shadow_maps_on,
+        lit: lits
+            .into_iter()
+            .map(|l| (l.tris, l.nodes, l.light_pos, l.receiver))
+            .collect(),
+        vpl_vis,
+    });
+    result
+}
 
+/// The camera's part of an sg frame: primary hits, cuts and shading, from a light stage.
+#[allow(clippy::too_many_arguments)]
+fn shade_frame(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &SgOptions,
+    eps: f32,
+    tree: &ReflectorTree,
+    brute: bool,
+    lits: &[LitScene],
+    maps: &[Option<VarianceShadowMap>],
+    vpl_vis: &[Option<ApproxVisibility>],
+    mut stats: SgStats,
+    progress: &Progress,
+) -> Option<(Image, SgStats)> {
     let camera = scene.camera.with_resolution(opts.width, opts.height);
     let w = opts.width as usize;
     let n_px = w * opts.height as usize;
@@ -360,9 +545,9 @@ pub fn render_sg(
         scene,
         accel,
         eps,
-        lits: &lits,
-        maps: &maps,
-        vpl_vis: &vpl_vis,
+        lits,
+        maps,
+        vpl_vis,
         leaf_of: if brute && !vpl_vis.is_empty() {
             let mut leaf_of = vec![0u32; tree.tri_order.len()];
             for (i, n) in tree.nodes.iter().enumerate() {
@@ -419,7 +604,7 @@ pub fn render_sg(
         scene,
         opts.device,
         opts.direct,
-        &maps,
+        maps,
         &hits,
         eps,
         progress.cancel,
@@ -429,38 +614,46 @@ pub fn render_sg(
 
     let t = Instant::now();
     let mut img = Image::new(opts.width, opts.height);
-    img.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        if progress.cancel.load(Ordering::Relaxed) {
-            return;
-        }
-        let mut scratch = Vec::new();
-        for (x, out) in row.iter_mut().enumerate() {
-            // Per pixel as well as per row: a row at a high spp can take many seconds.
+    let mut cut_sizes = vec![0f32; n_px];
+    img.data
+        .par_chunks_mut(w)
+        .zip(cut_sizes.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(y, (row, sizes))| {
             if progress.cancel.load(Ordering::Relaxed) {
                 return;
             }
-            let p = y * w + x;
-            let mut sum = DVec3::ZERO;
-            for s in 0..spp {
-                let v = ctx.shade(
-                    hits[p * spp + s].as_ref(),
-                    vertex_cuts.as_ref(),
-                    gpu_direct.as_ref().map(|g| g[p * spp + s]),
-                    gpu_indirect.as_ref().map(|g| g[p * spp + s]),
-                    &mut scratch,
-                    &tally,
-                );
-                if v.is_finite() {
-                    sum += v.as_dvec3();
-                } else {
-                    tally.bad.fetch_add(1, Ordering::Relaxed);
+            let mut scratch = Vec::new();
+            for (x, (out, size)) in row.iter_mut().zip(sizes.iter_mut()).enumerate() {
+                let nodes_before = THREAD_CUT_NODES.with(|n| n.get());
+                // Per pixel as well as per row: a row at a high spp can take many seconds.
+                if progress.cancel.load(Ordering::Relaxed) {
+                    return;
                 }
+                let p = y * w + x;
+                let mut sum = DVec3::ZERO;
+                for s in 0..spp {
+                    let v = ctx.shade(
+                        hits[p * spp + s].as_ref(),
+                        vertex_cuts.as_ref(),
+                        gpu_direct.as_ref().map(|g| g[p * spp + s]),
+                        gpu_indirect.as_ref().map(|g| g[p * spp + s]),
+                        &mut scratch,
+                        &tally,
+                    );
+                    if v.is_finite() {
+                        sum += v.as_dvec3();
+                    } else {
+                        tally.bad.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                *out = (sum / spp as f64).as_vec3();
+                *size = (THREAD_CUT_NODES.with(|n| n.get()) - nodes_before) as f32 / spp as f32;
             }
-            *out = (sum / spp as f64).as_vec3();
-        }
-        (progress.done)(1);
-    });
+            (progress.done)(1);
+        });
     stats.seconds.shading = t.elapsed().as_secs_f64();
+    stats.pixel_cut_sizes = cut_sizes;
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
     }

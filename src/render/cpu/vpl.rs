@@ -113,6 +113,9 @@ pub struct VplStats {
     pub visibility_rays: u64,
     pub nonfinite_samples: u64,
     pub seconds: VplTimes,
+    /// Where the VPLs are, for the viewer's overlay (not in the JSON log).
+    #[serde(skip)]
+    pub positions: Vec<glam::Vec3>,
 }
 
 /// A VPL ready to shade with: its frame (shading normal) and its material.
@@ -223,6 +226,9 @@ pub fn render_vpl(
                 })
                 .collect::<Vec<_>>();
             stats.vpls += emitters.len();
+            stats
+                .positions
+                .extend(emitters.iter().map(|e| e.vpl.position));
             lights.push(LightVpls { emitters, ism });
         }
         stats.seconds.ism = t.elapsed().as_secs_f64();

@@ -18,6 +18,7 @@ pub mod tonemap;
 pub mod twins;
 pub mod vpl;
 pub mod vsm;
+pub mod window;
 
 use std::sync::{Arc, Mutex};
 
@@ -52,6 +53,27 @@ pub struct Gpu {
     /// The compute pipelines built so far, by pass: lavapipe compiles a pipeline when it is
     /// created (from Mesa's disk cache after the first time, still tens of milliseconds).
     pipelines: Mutex<std::collections::HashMap<String, wgpu::ComputePipeline>>,
+}
+
+/// Opens a device on `adapter` (named `name` in errors) with all its limits and `features`.
+pub(crate) fn open_device(
+    adapter: &wgpu::Adapter,
+    name: &str,
+    label: &str,
+    features: wgpu::Features,
+) -> Result<(wgpu::Device, wgpu::Queue), GpuError> {
+    pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some(label),
+        required_features: features,
+        required_limits: adapter.limits(),
+        experimental_features: wgpu::ExperimentalFeatures::disabled(),
+        memory_hints: wgpu::MemoryHints::Performance,
+        trace: wgpu::Trace::Off,
+    }))
+    .map_err(|e| GpuError::Device {
+        adapter: name.to_string(),
+        reason: e.to_string(),
+    })
 }
 
 /// The process's shared device ([`Gpu::shared`]).
@@ -155,18 +177,7 @@ impl Gpu {
         let limits = adapter.limits();
         // Timestamps, for per-pass GPU times, where the adapter has them.
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("interreflect"),
-            required_features: features,
-            required_limits: limits.clone(),
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
-            memory_hints: wgpu::MemoryHints::Performance,
-            trace: wgpu::Trace::Off,
-        }))
-        .map_err(|e| GpuError::Device {
-            adapter: name.clone(),
-            reason: e.to_string(),
-        })?;
+        let (device, queue) = open_device(&adapter, &name, "interreflect", features)?;
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let lost = uncaptured.clone();
         device.set_device_lost_callback(move |reason, message| {
