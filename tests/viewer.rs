@@ -36,18 +36,8 @@ fn have_xvfb() -> bool {
 }
 
 fn render(dir: &Path, scene: &str, name: &str, args: &[&str]) -> Image {
-    let out = dir.join(format!("{name}.exr"));
-    let o = Command::new(exe())
-        .arg("render")
-        .arg(scene)
-        .args(args)
-        .args(["--quiet", "--output"])
-        .arg(&out)
-        .env("XDG_RUNTIME_DIR", dir)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    read_exr(&out).unwrap()
+    common::render_cli(dir, scene, name, args);
+    read_exr(&dir.join(format!("{name}.exr"))).unwrap()
 }
 
 fn mean(img: &Image) -> f64 {

@@ -188,7 +188,6 @@ pub fn run(args: ViewArgs) -> anyhow::Result<i32> {
         in_flight: false,
         last_change: Instant::now(),
         last_tick: Instant::now(),
-        started: Instant::now(),
         redraw_pending: true,
         repaint_after: None,
         commands: commands.into(),
@@ -389,7 +388,6 @@ struct App {
     in_flight: bool,
     last_change: Instant,
     last_tick: Instant,
-    started: Instant,
     /// Something asked for a repaint (input, a finished frame).
     redraw_pending: bool,
     /// egui's wish for the next repaint.
@@ -552,14 +550,6 @@ impl App {
             .into_iter()
             .map(|m| st.job(self.version, m, preview))
             .collect();
-        if std::env::var_os("INTERREFLECT_VIEW_TRACE").is_some() {
-            eprintln!(
-                "view: request {} ({}) at {:.2} s",
-                self.version,
-                if preview { "preview" } else { "full" },
-                self.started.elapsed().as_secs_f64()
-            );
-        }
         self.worker.submit(Request {
             id: self.version * 2 + preview as u64,
             jobs,
@@ -887,7 +877,6 @@ impl App {
             .get(&egui::ViewportId::ROOT)
             .map(|v| v.repaint_delay);
         let size = window.inner_size();
-        let tp = Instant::now();
         let primitives = ctx.tessellate(output.shapes, output.pixels_per_point);
         if let Some(gpu) = self.gpu.as_mut()
             && let Err(e) = gpu.paint(&Painted {
@@ -898,13 +887,6 @@ impl App {
             })
         {
             self.fail(event_loop, anyhow::anyhow!("{e}"));
-        }
-        if std::env::var_os("INTERREFLECT_VIEW_TRACE").is_some() {
-            eprintln!(
-                "view: redraw {:.1} ms, of which tessellating and painting {:.1} ms",
-                now.elapsed().as_secs_f64() * 1e3,
-                tp.elapsed().as_secs_f64() * 1e3
-            );
         }
     }
 
