@@ -155,6 +155,192 @@ fn a_scripted_session_matches_render_and_follows_the_light() {
     assert!(stderr.contains("view: sg 32×32"), "{stderr}");
 }
 
+/// A small PRT scene: the ring, coarsely tessellated, under a directional light, with a
+/// transfer cheap enough for a test (order 3, 64 rays per vertex, about 4k vertices).
+const PRT_RING: &str = r#"
+name = "ring-prt-test"
+[camera]
+position = [0.0, 3.6, 2.3]
+look_at = [0.0, 0.0, 0.15]
+up = [0.0, 1.0, 0.0]
+fov_y = 38.0
+width = 32
+height = 32
+[[lights]]
+type = "directional"
+direction = [4.5, -2.1, 0.0]
+irradiance = [2.4, 2.4, 2.4]
+[materials.gold]
+model = "lambert"
+diffuse = [1.0, 0.71, 0.29]
+[materials.floor]
+model = "lambert"
+diffuse = [0.75, 0.75, 0.75]
+[[objects]]
+name = "ring"
+material = "gold"
+shape = { type = "ring", radius = 1.0, height = 0.3, thickness = 0.05, segments = 48 }
+[[objects]]
+name = "floor"
+material = "floor"
+shape = { type = "plane", size = [8.0, 8.0], subdivisions = 48 }
+[methods.prt]
+order = 3
+transfer = "interreflected"
+bounces = 1
+samples = 64
+"#;
+
+/// prt in the viewer: its frames are `render --method prt`'s images for the same settings,
+/// bit for bit (both relight with the CPU twin here and read one transfer), the transfer the
+/// viewer computed is the one `render` then reads from the cache, a turned directional light
+/// changes the image without a new transfer, and indirect-only shows the bounce alone.
+#[test]
+fn prt_in_the_viewer_matches_render_and_relights_without_a_new_transfer() {
+    if !have_xvfb() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("ring-prt.toml");
+    std::fs::write(&scene, PRT_RING).unwrap();
+    let cache = d.join("cache");
+    let shot = |n: &str| d.join(format!("{n}.png")).display().to_string();
+    let script = format!(
+        "method prt\n\
+         screenshot {}\n\
+         light 0 direction 2 -4 1.5\n\
+         screenshot {}\n\
+         indirect on\n\
+         screenshot {}\n",
+        shot("prt"),
+        shot("prt-moved"),
+        shot("prt-indirect"),
+    );
+    std::fs::write(d.join("session.txt"), script).unwrap();
+    let o = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(exe())
+        .args(["view"])
+        .arg(&scene)
+        .args(["--window", "800x500", "--prt-cache"])
+        .arg(&cache)
+        .arg("--script")
+        .arg(d.join("session.txt"))
+        .env("XDG_RUNTIME_DIR", d)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    // One transfer for the whole session: computed once, then relit.
+    assert_eq!(
+        stderr.matches("prt: transfer computed").count(),
+        1,
+        "{stderr}"
+    );
+    let shots: Vec<Image> = ["prt", "prt-moved", "prt-indirect"]
+        .iter()
+        .map(|n| read_exr(&d.join(format!("{n}.exr"))).unwrap())
+        .collect();
+
+    let moved_scene = d.join("ring-prt-moved.toml");
+    assert!(PRT_RING.contains("direction = [4.5, -2.1, 0.0]"));
+    std::fs::write(
+        &moved_scene,
+        PRT_RING.replace(
+            "direction = [4.5, -2.1, 0.0]",
+            "direction = [2.0, -4.0, 1.5]",
+        ),
+    )
+    .unwrap();
+    let cache_arg = cache.display().to_string();
+    let args = [
+        "--method",
+        "prt",
+        "--width",
+        "32",
+        "--spp",
+        "1",
+        "--device",
+        "cpu",
+        "--prt-cache",
+        &cache_arg,
+    ];
+    let scene_arg = scene.display().to_string();
+    let moved_arg = moved_scene.display().to_string();
+    let expected = [
+        render(d, &scene_arg, "r-prt", &args),
+        render(d, &moved_arg, "r-prt-moved", &args),
+        render(
+            d,
+            &moved_arg,
+            "r-prt-indirect",
+            &[&args[..], &["--indirect-only"]].concat(),
+        ),
+    ];
+    let log = std::fs::read_to_string(d.join("r-prt.json")).unwrap();
+    let log =
+        serde_json::to_string(&serde_json::from_str::<serde_json::Value>(&log).unwrap()).unwrap();
+    assert!(
+        log.contains(r#""cache":"hit""#),
+        "render read the viewer's transfer: {log}"
+    );
+    for (name, a, b) in [
+        ("prt", &shots[0], &expected[0]),
+        ("prt, light turned", &shots[1], &expected[1]),
+        ("prt, indirect only", &shots[2], &expected[2]),
+    ] {
+        let m = metrics(a, b).unwrap();
+        assert_eq!(
+            m.rel_rmse, 0.0,
+            "{name}: the viewer's frame differs from render's"
+        );
+    }
+    // Turning the light changes the image a lot; the bounce alone is a small part of it.
+    let m = metrics(&shots[1], &shots[0]).unwrap();
+    assert!(
+        m.rel_rmse > 0.1,
+        "turning the light changed little: {}",
+        m.rel_rmse
+    );
+    let (all, bounce) = (mean(&shots[1]), mean(&shots[2]));
+    assert!(
+        bounce > 0.0 && bounce < 0.5 * all,
+        "bounce {bounce} of {all}"
+    );
+}
+
+/// prt on a scene with only point lights: a black frame and a notice that names a scene PRT
+/// can relight, without computing a transfer for nothing.
+#[test]
+fn prt_without_distant_lighting_says_so() {
+    if !have_xvfb() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("prt.png");
+    let o = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(exe())
+        .args(["view", &ring(), "--method", "prt", "--width", "16"])
+        .args(["--frames", "1", "--window", "640x400", "--prt-cache"])
+        .arg(d.join("cache"))
+        .arg("--screenshot")
+        .arg(&out)
+        .env("XDG_RUNTIME_DIR", d)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("no distant lighting"), "{stderr}");
+    assert!(stderr.contains("scenes/prt/"), "{stderr}");
+    assert!(!stderr.contains("transfer computed"), "{stderr}");
+    assert!(!d.join("cache").exists(), "no transfer was cached");
+    let img = read_exr(&out.with_extension("exr")).unwrap();
+    assert_eq!(mean(&img), 0.0);
+}
+
 /// `--frames N --screenshot OUT` renders, saves the last frame and exits.
 #[test]
 fn frames_and_screenshot_save_the_frame_and_exit() {
@@ -226,7 +412,7 @@ fn no_display_and_bad_scripts_are_clear_errors() {
     assert!(stderr.contains("bad.txt:2: light position"), "{stderr}");
 
     for (args, needle) in [
-        (&["--method", "prt"][..], "--method prt"),
+        (&["--method", "bogus"][..], "--method bogus"),
         (&["--window", "10x10"][..], "--window"),
         (&["--frames", "1", "--screenshot", "a.jpg"][..], ".png"),
         (&["--screenshot", "a.png"][..], "--frames"),

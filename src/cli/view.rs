@@ -8,7 +8,9 @@ use interreflect::image::{Image, Tonemap, write_exr, write_png};
 use interreflect::render::Device;
 use interreflect::render::gpu::window::{Painted, WindowGpu};
 use interreflect::scene::{Light, Scene};
-use interreflect::viewer::camera::project;
+use interreflect::viewer::camera::{
+    MAX_LIGHT_ELEVATION, drag_light_direction, light_angles, light_direction, project,
+};
 use interreflect::viewer::script::{self, Command, MaterialField};
 use interreflect::viewer::{Frame, FrameRenderer, Job, ViewMethod, ViewState};
 use std::path::{Path, PathBuf};
@@ -33,7 +35,7 @@ pub struct ViewArgs {
     /// Run a script of viewer commands, then exit (docs/viewer.md lists them).
     #[arg(long)]
     pub script: Option<PathBuf>,
-    /// Method shown first: sg, vpl, direct or reference.
+    /// Method shown first: sg, vpl, direct, prt or reference.
     #[arg(long, default_value = "sg")]
     pub method: String,
     /// Full-quality image width (default: the scene camera's, halved until at most 128).
@@ -55,6 +57,12 @@ pub struct ViewArgs {
     /// Window size in logical pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x640")]
     pub window: String,
+    /// prt: directory of the transfer cache (shared with `render --method prt`).
+    #[arg(long, default_value = interreflect::viewer::prt::CACHE_DIR)]
+    pub prt_cache: PathBuf,
+    /// prt: neither read nor write the transfer cache.
+    #[arg(long)]
+    pub no_cache: bool,
 }
 
 /// Seconds of stillness after which the full-quality frame is rendered.
@@ -74,7 +82,7 @@ const MAX_BOX_DEPTH: u32 = 8;
 pub fn run(args: ViewArgs) -> anyhow::Result<i32> {
     let method = ViewMethod::parse(&args.method).with_context(|| {
         format!(
-            "--method {}: the viewer shows sg, vpl, direct or reference",
+            "--method {}: the viewer shows sg, vpl, direct, prt or reference",
             args.method
         )
     })?;
@@ -170,7 +178,14 @@ pub fn run(args: ViewArgs) -> anyhow::Result<i32> {
             args.scene.display()
         )
     })?;
-    let worker = Worker::start(scene.clone(), accel, args.device, event_loop.create_proxy());
+    let prt_cache = (!args.no_cache).then(|| args.prt_cache.clone());
+    let worker = Worker::start(
+        scene.clone(),
+        accel,
+        args.device,
+        prt_cache,
+        event_loop.create_proxy(),
+    );
     let mut app = App {
         scene,
         state,
@@ -203,6 +218,8 @@ pub fn run(args: ViewArgs) -> anyhow::Result<i32> {
         boxes: Vec::new(),
         fly_keys: [false; 6],
         drag_light: false,
+        last_notices: Vec::new(),
+        last_pending: false,
         dragging: false,
         auto_factor: 0,
         last_full: std::collections::HashMap::new(),
@@ -247,7 +264,8 @@ fn check_png(p: &Path, what: &str) -> anyhow::Result<()> {
 /// A request for the worker: one job per image shown (two in split view).
 struct Request {
     id: u64,
-    jobs: Vec<Job>,
+    /// Each job with its slot (0: left or the whole view, 1: right half).
+    jobs: Vec<(usize, Job)>,
 }
 
 /// A frame back from the worker, for slot 0 (left, or the whole view) or 1 (right half).
@@ -273,6 +291,7 @@ impl Worker {
         scene: Scene,
         accel: Arc<Accel>,
         device: Device,
+        prt_cache: Option<PathBuf>,
         wake: winit::event_loop::EventLoopProxy<()>,
     ) -> Worker {
         let (send, jobs) = mpsc::channel::<Request>();
@@ -284,6 +303,7 @@ impl Worker {
             .name("render".into())
             .spawn(move || {
                 let mut renderer = FrameRenderer::new(scene, accel, device);
+                renderer.set_prt_cache(prt_cache);
                 let mut next: Option<Request> = None;
                 loop {
                     let mut req = match next.take() {
@@ -301,11 +321,24 @@ impl Worker {
                         continue;
                     }
                     let mut cancelled = false;
-                    for (slot, job) in req.jobs.iter().enumerate() {
+                    // The slots to render again: a still reference refines until something
+                    // changes, a pending prt frame asks again until its transfer is ready.
+                    let mut again = Vec::new();
+                    for (slot, job) in &req.jobs {
                         let Some(frame) = renderer.render(job, &c) else {
                             cancelled = true;
                             break;
                         };
+                        if frame.pending {
+                            again.push((*slot, job.clone()));
+                        } else if job.method == ViewMethod::Reference
+                            && !job.preview
+                            && job.pass + 1 < MAX_PASSES
+                        {
+                            let mut j = job.clone();
+                            j.pass += 1;
+                            again.push((*slot, j));
+                        }
                         let boxes = if job.method == ViewMethod::Sg {
                             (0..=MAX_BOX_DEPTH)
                                 .map(|d| renderer.node_boxes(d))
@@ -316,7 +349,7 @@ impl Worker {
                         if done
                             .send(Done {
                                 id: req.id,
-                                slot,
+                                slot: *slot,
                                 frame,
                                 boxes,
                             })
@@ -326,23 +359,10 @@ impl Worker {
                         }
                         let _ = wake.send_event(());
                     }
-                    // A still reference keeps refining until something changes.
                     if !cancelled && let Ok(r) = jobs.try_recv() {
                         next = Some(r);
-                    } else if !cancelled
-                        && req
-                            .jobs
-                            .iter()
-                            .any(|j| j.method == ViewMethod::Reference && !j.preview)
-                        && req.jobs[0].pass + 1 < MAX_PASSES
-                    {
-                        for j in &mut req.jobs {
-                            if j.method == ViewMethod::Reference {
-                                j.pass += 1;
-                            }
-                        }
-                        // Only the reference slots are rendered again.
-                        req.jobs.retain(|j| j.method == ViewMethod::Reference);
+                    } else if !cancelled && !again.is_empty() {
+                        req.jobs = again;
                         next = Some(req);
                     }
                 }
@@ -414,6 +434,10 @@ struct App {
     drag_light: bool,
     /// Fly keys held: W, S, D, A, E, Q.
     fly_keys: [bool; 6],
+    /// The notices last written to the log (each is written when it first appears).
+    last_notices: Vec<String>,
+    /// The last frame back was pending.
+    last_pending: bool,
 }
 
 impl ApplicationHandler for App {
@@ -544,11 +568,16 @@ impl App {
 
     fn request(&mut self, preview: bool) {
         let mut st = self.state.clone();
-        st.preview_factor = st.preview_factor.max(self.auto_factor);
+        st.preview_factor = if self.interactive_at_full_quality() {
+            1
+        } else {
+            st.preview_factor.max(self.auto_factor)
+        };
         let jobs = self
             .methods()
             .into_iter()
-            .map(|m| st.job(self.version, m, preview))
+            .enumerate()
+            .map(|(slot, m)| (slot, st.job(self.version, m, preview)))
             .collect();
         self.worker.submit(Request {
             id: self.version * 2 + preview as u64,
@@ -563,31 +592,44 @@ impl App {
         while let Ok(done) = self.worker.recv.try_recv() {
             let version = done.id / 2;
             let f = &done.frame;
-            eprintln!(
-                "view: {} {}×{} at {} spp{}{}: {:.2} s ({})",
-                f.job.method.name(),
-                f.job.width,
-                f.job.height,
-                f.job.spp,
-                if f.job.preview { ", moving" } else { "" },
-                if f.passes > 1 {
-                    format!(", pass {}", f.passes)
-                } else {
-                    String::new()
-                },
-                f.seconds,
-                f.stages
-                    .iter()
-                    .filter(|(n, t)| *t >= 0.005 || n.contains("kept"))
-                    .map(|(n, t)| format!("{n} {t:.2} s"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-            if !done.frame.job.preview {
+            // A pending frame is logged once, by its notice.
+            let repeated = f.pending && self.last_pending;
+            self.last_pending = f.pending;
+            if !f.pending {
+                eprintln!(
+                    "view: {} {}×{} at {} spp{}{}: {:.3} s ({})",
+                    f.job.method.name(),
+                    f.job.width,
+                    f.job.height,
+                    f.job.spp,
+                    if f.job.preview { ", moving" } else { "" },
+                    if f.passes > 1 {
+                        format!(", pass {}", f.passes)
+                    } else {
+                        String::new()
+                    },
+                    f.seconds,
+                    f.stages
+                        .iter()
+                        .filter(|(n, t)| *t >= 0.005 || n.contains("kept"))
+                        .map(|(n, t)| format!("{n} {t:.2} s"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+            if f.notices != self.last_notices && !repeated {
+                for n in &f.notices {
+                    eprintln!("view: {n}");
+                }
+                self.last_notices = f.notices.clone();
+            }
+            // A pending frame (prt's transfer being computed) measures nothing.
+            if !done.frame.pending && !done.frame.job.preview {
                 self.last_full
                     .insert(done.frame.job.method, done.frame.seconds);
             }
-            if !done.frame.job.preview && done.slot == 0 {
+            if done.frame.pending {
+            } else if !done.frame.job.preview && done.slot == 0 {
                 self.still_times.push(done.frame.seconds);
             } else if done.frame.job.preview && done.slot == 0 {
                 self.moving_times.push(done.frame.seconds);
@@ -640,6 +682,17 @@ impl App {
         }
     }
 
+    /// Whether every shown method's last full-quality frame fits in one repaint interval
+    /// (prt's do): previews would then only blur frames the window can show as they are, so
+    /// frames while moving keep the full size (at 1 spp).
+    fn interactive_at_full_quality(&self) -> bool {
+        self.methods().iter().all(|m| {
+            self.last_full
+                .get(m)
+                .is_some_and(|&t| t <= 1.0 / REPAINT_FPS)
+        })
+    }
+
     /// Keeps frames while moving at most a tenth of a full-quality frame: a preview slower
     /// than that (against the last full frame of the same method) makes the next previews
     /// smaller, one much faster lets them grow back to the panel's factor.
@@ -663,6 +716,7 @@ impl App {
             self.shown[k].as_ref().is_some_and(|s| {
                 s.version == self.version
                     && !s.frame.job.preview
+                    && !s.frame.pending
                     && s.frame.job.method == self.methods()[k]
             })
         })
@@ -930,10 +984,14 @@ impl App {
                     ui.horizontal(|ui| {
                         ui.label("While moving: 1 /");
                         ui.add(egui::DragValue::new(&mut self.state.preview_factor).range(1..=16));
-                        ui.label(format!(
-                            "of the size, 1 spp (now 1 / {})",
-                            self.state.preview_factor.max(self.auto_factor)
-                        ));
+                        ui.label(if self.interactive_at_full_quality() {
+                            "of the size, 1 spp (now full size: frames are fast)".to_string()
+                        } else {
+                            format!(
+                                "of the size, 1 spp (now 1 / {})",
+                                self.state.preview_factor.max(self.auto_factor)
+                            )
+                        });
                     });
                     ui.separator();
                     self.light_controls(ui);
@@ -1009,17 +1067,21 @@ impl App {
         ui.label("Lights");
         for (k, light) in self.state.lights.iter_mut().enumerate() {
             ui.push_id(k, |ui| {
-                let (kind, pos, power) = match light {
+                let (kind, pos, dir, power) = match light {
                     Light::Point {
                         position,
                         intensity,
-                    } => ("point", Some(position), intensity),
+                    } => ("point", Some(position), None, intensity),
                     Light::Spot {
                         position,
+                        direction,
                         intensity,
                         ..
-                    } => ("spot", Some(position), intensity),
-                    Light::Directional { irradiance, .. } => ("directional", None, irradiance),
+                    } => ("spot", Some(position), Some(direction), intensity),
+                    Light::Directional {
+                        direction,
+                        irradiance,
+                    } => ("directional", None, Some(direction), irradiance),
                 };
                 ui.label(format!("{k}: {kind}"));
                 if let Some(p) = pos {
@@ -1027,6 +1089,28 @@ impl App {
                         ui.label("position");
                         for c in [&mut p.x, &mut p.y, &mut p.z] {
                             ui.add(egui::DragValue::new(c).speed(0.02));
+                        }
+                    });
+                }
+                if let Some(dir) = dir {
+                    // In degrees: where a directional light comes from, where a spot aims.
+                    let sign = if kind == "spot" { -1.0 } else { 1.0 };
+                    let (mut az, mut el) = light_angles(sign * *dir);
+                    ui.horizontal(|ui| {
+                        ui.label(if kind == "spot" { "aim" } else { "from" });
+                        let a = ui
+                            .add(egui::DragValue::new(&mut az).speed(0.5).suffix("° az"))
+                            .changed();
+                        let b = ui
+                            .add(
+                                egui::DragValue::new(&mut el)
+                                    .range(-MAX_LIGHT_ELEVATION..=MAX_LIGHT_ELEVATION)
+                                    .speed(0.5)
+                                    .suffix("° el"),
+                            )
+                            .changed();
+                        if a || b {
+                            *dir = sign * light_direction(az, el);
                         }
                     });
                 }
@@ -1153,6 +1237,16 @@ impl App {
             if !f.shadow_maps_on.is_empty() {
                 ui.label(format!("    shadow maps on {}", f.shadow_maps_on));
             }
+            for n in &f.notices {
+                let colour = if f.pending || n.contains("ignored") || n.contains("needs") {
+                    egui::Color32::from_rgb(240, 200, 80)
+                } else {
+                    ui.visuals().text_color()
+                };
+                ui.add(
+                    egui::Label::new(egui::RichText::new(format!("    {n}")).color(colour)).wrap(),
+                );
+            }
             if let Some(r) = &self.reference {
                 ui.label(format!("    {}", error_readout(&f.image, r)));
             }
@@ -1206,6 +1300,23 @@ impl App {
                 painter.image(t.id(), rect, uv, egui::Color32::WHITE);
             }
             self.overlays(&painter, rect);
+            // A pending frame (prt's transfer) says what it waits for over its black image.
+            if let Some(n) = self
+                .shown
+                .iter()
+                .flatten()
+                .find(|s| s.frame.pending)
+                .and_then(|s| s.frame.notices.last())
+            {
+                let galley = painter.layout(
+                    n.clone(),
+                    egui::FontId::proportional(14.0),
+                    egui::Color32::from_rgb(240, 200, 80),
+                    0.8 * rect.width(),
+                );
+                let at = rect.center() - 0.5 * galley.size();
+                painter.galley(at, galley, egui::Color32::WHITE);
+            }
             // Camera and light input over the image. While a button is held the view counts
             // as moving, even when the pointer pauses.
             self.dragging = resp.dragged();
@@ -1216,12 +1327,17 @@ impl App {
             if resp.dragged_by(egui::PointerButton::Primary) && d != egui::Vec2::ZERO {
                 if shift {
                     let cam = c.camera(self.state.width, self.state.height);
-                    if let Some(Light::Point { position, .. } | Light::Spot { position, .. }) =
-                        self.state.lights.first_mut()
-                    {
-                        let depth = (*position - cam.position).dot(cam.forward).max(1e-3);
-                        let per_px = 2.0 * depth * (0.5 * cam.fov_y).tan() / h.max(1.0);
-                        *position += (cam.right * d.x - cam.up * d.y) * per_px;
+                    match self.state.lights.first_mut() {
+                        Some(Light::Point { position, .. } | Light::Spot { position, .. }) => {
+                            let depth = (*position - cam.position).dot(cam.forward).max(1e-3);
+                            let per_px = 2.0 * depth * (0.5 * cam.fov_y).tan() / h.max(1.0);
+                            *position += (cam.right * d.x - cam.up * d.y) * per_px;
+                        }
+                        // A directional light turns about the up axis and rises or sets.
+                        Some(Light::Directional { direction, .. }) => {
+                            *direction = drag_light_direction(*direction, d.x * scale, d.y * scale);
+                        }
+                        None => {}
                     }
                 } else {
                     c.orbit(d.x * scale, d.y * scale);

@@ -29,7 +29,7 @@ use crate::math::sampling::cosine_hemisphere;
 use crate::math::sh;
 use crate::math::{Frame, Rng};
 use crate::render::cpu::Progress;
-use crate::scene::{Light, Scene};
+use crate::scene::{Environment, Light, Scene};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -384,21 +384,38 @@ pub fn relight_cpu(transfer: &[Vec3], coefficients: usize, lighting: &[Vec3]) ->
 /// with exact texel solid angles, plus its directional lights as deltas, windowed. Point and spot
 /// lights are not distant and cannot be represented; they are listed in the returned warnings.
 pub fn sh_lighting(scene: &Scene, order: u32, window: sh::Window) -> (Vec<Vec3>, Vec<String>) {
+    let env = scene.environment.as_ref().map(|e| sh_environment(e, order));
+    sh_lighting_with(env.as_deref(), &scene.lights, order, window)
+}
+
+/// The SH projection of an environment map (radiance, unwindowed), with exact texel solid
+/// angles: the part of [`sh_lighting`] that does not change when the lights move.
+pub fn sh_environment(env: &Environment, order: u32) -> Vec<Vec3> {
+    let samples = (0..env.height()).flat_map(|y| {
+        let w = env.texel_solid_angle(y);
+        (0..env.width()).map(move |x| (env.texel_direction(x, y), w, env.texel(x, y)))
+    });
+    sh::project_samples(order, samples)
+}
+
+/// [`sh_lighting`] from an environment already projected by [`sh_environment`] (`None`: no
+/// environment) and a list of lights.
+pub fn sh_lighting_with(
+    environment: Option<&[Vec3]>,
+    lights: &[Light],
+    order: u32,
+    window: sh::Window,
+) -> (Vec<Vec3>, Vec<String>) {
     let n = sh::sh_count(order);
     let mut coeffs = vec![Vec3::ZERO; n];
     let mut warnings = Vec::new();
-    if let Some(env) = &scene.environment {
-        let samples = (0..env.height()).flat_map(|y| {
-            let w = env.texel_solid_angle(y);
-            (0..env.width()).map(move |x| (env.texel_direction(x, y), w, env.texel(x, y)))
-        });
-        let c = sh::project_samples(order, samples);
+    if let Some(c) = environment {
         for (a, b) in coeffs.iter_mut().zip(c) {
-            *a += b;
+            *a += *b;
         }
     }
     let mut skipped = 0;
-    for light in &scene.lights {
+    for light in lights {
         match *light {
             Light::Directional {
                 direction,
@@ -417,12 +434,15 @@ pub fn sh_lighting(scene: &Scene, order: u32, window: sh::Window) -> (Vec<Vec3>,
             "prt: {skipped} point/spot light(s) ignored: PRT relights with distant lighting only (environment maps and directional lights)"
         ));
     }
-    if scene.environment.is_none() && skipped == scene.lights.len() {
-        warnings.push("prt: the scene has no distant lighting: the image is black".into());
+    if environment.is_none() && skipped == lights.len() {
+        warnings.push(NO_DISTANT_LIGHTING.into());
     }
     sh::apply_window(&mut coeffs, order, window);
     (coeffs, warnings)
 }
+
+/// The warning of [`sh_lighting`] when nothing in the scene is distant lighting.
+pub const NO_DISTANT_LIGHTING: &str = "prt: the scene has no distant lighting: the image is black";
 
 /// Where a transfer came from.
 #[derive(Clone, Debug, PartialEq)]

@@ -295,6 +295,37 @@ pub fn project(cam: &Camera, p: Vec3) -> Option<Vec2> {
     ))
 }
 
+/// Azimuth and elevation, in degrees, of the direction a directional light comes from
+/// (`-direction`): azimuth about +y from +x towards +z, elevation above the xz plane.
+pub fn light_angles(direction: Vec3) -> (f32, f32) {
+    let to_light = -direction.normalize_or(Vec3::NEG_Y);
+    let az = to_light.z.atan2(to_light.x).to_degrees();
+    let el = to_light.y.clamp(-1.0, 1.0).asin().to_degrees();
+    (az, el)
+}
+
+/// The light's `direction` (the way its light travels) for a light seen at `az`, `el`
+/// degrees ([`light_angles`]' inverse).
+pub fn light_direction(az: f32, el: f32) -> Vec3 {
+    let (az, el) = (az.to_radians(), el.clamp(-90.0, 90.0).to_radians());
+    -Vec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin())
+}
+
+/// Highest elevation a drag takes a directional light to: short of the pole, where the
+/// azimuth is undefined.
+pub const MAX_LIGHT_ELEVATION: f32 = 89.0;
+
+/// A directional light dragged `dx`, `dy` pixels: right turns it about the up axis the way
+/// an orbit turns the camera, up raises it, at [`ORBIT_PER_PIXEL`] radians per pixel.
+pub fn drag_light_direction(direction: Vec3, dx: f32, dy: f32) -> Vec3 {
+    let (az, el) = light_angles(direction);
+    let per_px = ORBIT_PER_PIXEL.to_degrees();
+    light_direction(
+        az + dx * per_px,
+        (el - dy * per_px).clamp(-MAX_LIGHT_ELEVATION, MAX_LIGHT_ELEVATION),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -449,5 +480,37 @@ mod tests {
         // Pixel (48, 12) of 64 × 48: ndc (0.5, 0.5).
         assert!((ndc - Vec2::new(0.5, 0.5)).length() < 1e-4, "{ndc}");
         assert!(project(&cam, cam.position - cam.forward).is_none());
+    }
+
+    /// Light angles round-trip, name the direction the light comes from, and a drag turns
+    /// and raises it without crossing the pole.
+    #[test]
+    fn light_direction_round_trips_and_drags() {
+        // From +x, 30° up: the light travels towards -x and down.
+        let d = light_direction(0.0, 30.0);
+        assert!(close(d, -Vec3::new(0.866_025_4, 0.5, 0.0), TOL), "{d}");
+        for (az, el) in [(0.0, 45.0), (120.0, 10.0), (-75.0, -20.0), (179.0, 80.0)] {
+            let (a, e) = light_angles(light_direction(az, el));
+            // Degrees after asin/atan2 of f32 components: ~1e-3° (asin loses digits near
+            // the poles; 80° is the steepest case here).
+            assert!(
+                (a - az).abs() < 1e-3 && (e - el).abs() < 1e-3,
+                "{az} {el}: {a} {e}"
+            );
+        }
+        let start = light_direction(0.0, 30.0);
+        let turned = drag_light_direction(start, 100.0, 0.0);
+        let (a, e) = light_angles(turned);
+        let expect = 100.0 * ORBIT_PER_PIXEL.to_degrees();
+        assert!(
+            (a - expect).abs() < 1e-3 && (e - 30.0).abs() < 1e-3,
+            "{a} {e}"
+        );
+        // Dragging up (negative dy) raises the light, and stops short of the pole.
+        let (_, e) = light_angles(drag_light_direction(start, 0.0, -20.0));
+        assert!(e > 30.0, "{e}");
+        let (_, e) = light_angles(drag_light_direction(start, 0.0, -1e5));
+        assert!((e - MAX_LIGHT_ELEVATION).abs() < 1e-2, "{e}");
+        assert!(turned.is_normalized());
     }
 }

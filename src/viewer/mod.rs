@@ -10,6 +10,7 @@
 //!   light or the camera (the BVH, and sg's reflector pieces and tree) between frames.
 
 pub mod camera;
+pub mod prt;
 pub mod script;
 
 use crate::accel::Accel;
@@ -33,15 +34,19 @@ pub enum ViewMethod {
     Vpl,
     /// Direct light only, as `render --method direct`.
     Direct,
+    /// SH diffuse PRT, as `render --method prt` (distant lighting only: directional lights and
+    /// the environment map).
+    Prt,
     /// The path-traced reference, refined progressively while nothing changes.
     Reference,
 }
 
 impl ViewMethod {
-    pub const ALL: [ViewMethod; 4] = [
+    pub const ALL: [ViewMethod; 5] = [
         ViewMethod::Sg,
         ViewMethod::Vpl,
         ViewMethod::Direct,
+        ViewMethod::Prt,
         ViewMethod::Reference,
     ];
 
@@ -50,6 +55,7 @@ impl ViewMethod {
             ViewMethod::Sg => "sg",
             ViewMethod::Vpl => "vpl",
             ViewMethod::Direct => "direct",
+            ViewMethod::Prt => "prt",
             ViewMethod::Reference => "reference",
         }
     }
@@ -400,6 +406,12 @@ pub struct Frame {
     pub passes: u32,
     /// Where the GPU stages ran ("cpu", or "gpu (adapter)").
     pub shadow_maps_on: String,
+    /// What the panel should say about this frame (prt: the transfer's progress or origin,
+    /// lights it ignores).
+    pub notices: Vec<String>,
+    /// The frame is a placeholder (prt's transfer is being computed): the renderer is to be
+    /// asked for it again.
+    pub pending: bool,
 }
 
 /// Renders jobs with the renderers of `interreflect render` and the same settings as its
@@ -413,6 +425,7 @@ pub struct FrameRenderer {
     full_lights: Option<Vec<Light>>,
     /// The progressive reference: the job it accumulates and the sum so far.
     accumulated: Option<(Job, Vec<Vec3>, u32)>,
+    prt: prt::PrtView,
 }
 
 impl FrameRenderer {
@@ -424,7 +437,13 @@ impl FrameRenderer {
             prepared: None,
             full_lights: None,
             accumulated: None,
+            prt: prt::PrtView::new(Some(prt::CACHE_DIR.into())),
         }
+    }
+
+    /// Where prt's transfers are cached (`None`: they are not).
+    pub fn set_prt_cache(&mut self, dir: Option<std::path::PathBuf>) {
+        self.prt = prt::PrtView::new(dir);
     }
 
     pub fn scene(&self) -> &Scene {
@@ -466,6 +485,8 @@ impl FrameRenderer {
     /// Renders `job`; `None` when `cancel` was set meanwhile.
     pub fn render(&mut self, job: &Job, cancel: &AtomicBool) -> Option<Frame> {
         let t = std::time::Instant::now();
+        // prt's wait for its transfer, which the frame's time leaves out.
+        let mut waited = 0.0;
         self.scene.camera = job.camera;
         self.scene.lights = job.lights.clone();
         self.scene.materials = job.materials.clone();
@@ -484,6 +505,8 @@ impl FrameRenderer {
             vpls: Vec::new(),
             passes: 1,
             shadow_maps_on: String::new(),
+            notices: Vec::new(),
+            pending: false,
         };
         match job.method {
             ViewMethod::Sg => {
@@ -573,6 +596,27 @@ impl FrameRenderer {
                 frame.vpls = stats.positions;
                 frame.shadow_maps_on = stats.shadow_maps_on;
             }
+            ViewMethod::Prt => {
+                let image = crate::render::cpu::prt::PrtImageOptions {
+                    width: job.width,
+                    height: job.height,
+                    spp: job.spp,
+                    seed: job.seed,
+                };
+                let f = self.prt.frame(
+                    &self.scene,
+                    &self.accel,
+                    job.materials_version,
+                    image,
+                    job.indirect_only,
+                    cancel,
+                )?;
+                frame.image = f.image;
+                frame.stages = f.stages;
+                frame.notices = f.notices;
+                frame.pending = f.pending;
+                waited = f.waited;
+            }
             ViewMethod::Direct | ViewMethod::Reference => {
                 let r = self.scene.settings.reference;
                 let reference = job.method == ViewMethod::Reference;
@@ -607,7 +651,7 @@ impl FrameRenderer {
                 }
             }
         }
-        frame.seconds = t.elapsed().as_secs_f64();
+        frame.seconds = t.elapsed().as_secs_f64() - waited;
         Some(frame)
     }
 }

@@ -2,7 +2,7 @@
 //! order, for tests and for producing figures. `#` starts a comment.
 //!
 //! ```text
-//! method sg                      # sg | vpl | direct | reference
+//! method sg                      # sg | vpl | direct | prt | reference
 //! size 96 72                     # full-quality image size (height 0: the camera's aspect)
 //! spp 4                          # samples per pixel of a full-quality frame
 //! light 0 position 1 2.5 0.5     # light index, then position | direction | intensity | colour
@@ -86,7 +86,8 @@ pub const MAX_SPP: u32 = 4096;
 /// Most frames one `frames` command may wait.
 pub const MAX_FRAMES: u32 = 100_000;
 
-pub const METHODS: [&str; 4] = ["sg", "vpl", "direct", "reference"];
+/// The methods `method` and `split` accept: [`crate::viewer::ViewMethod::ALL`]'s names.
+pub const METHODS: [&str; 5] = ["sg", "vpl", "direct", "prt", "reference"];
 pub const OVERLAYS: [&str; 3] = ["vpls", "boxes", "heatmap"];
 
 /// Parses a script; relative screenshot paths are kept as written (relative to the working
@@ -321,6 +322,16 @@ fn command(words: &[&str]) -> Result<Command, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The script accepts exactly the viewer's methods.
+    #[test]
+    fn script_methods_are_the_viewers() {
+        let names: Vec<&str> = crate::viewer::ViewMethod::ALL
+            .iter()
+            .map(|m| m.name())
+            .collect();
+        assert_eq!(names, METHODS);
+    }
 
     #[test]
     fn every_command_parses() {
