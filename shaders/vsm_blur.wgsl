@@ -1,4 +1,4 @@
-// Separable Gaussian blur (σ = radius / 2, clamped at the edges) of the six faces of a
+// Separable Gaussian blur (σ = radius / 2, clamped at the edges) of the faces (one per z) of a
 // variance shadow map, one direction per dispatch. Rust twin: `visibility::vsm`'s `blur`.
 // Prepended with shaders/shared/*.wgsl.
 

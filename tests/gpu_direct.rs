@@ -30,20 +30,6 @@ fn direct_render(scene: &Scene, accel: &Accel, device: Device) -> (Image, VplSta
     render_vpl_quiet(scene, accel, &opts)
 }
 
-/// The ring with its point light replaced by `light` (TOML).
-fn ring_with(light: &str) -> (Scene, Accel) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ring.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let point = "type = \"point\"\nposition = [-4.5, 2.1, 0.0]\nintensity = [60.0, 60.0, 60.0]";
-    assert!(text.contains(point), "the ring's light changed");
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("ring.toml");
-    std::fs::write(&file, text.replace(point, light)).unwrap();
-    let scene = Scene::load(&file).unwrap();
-    let accel = Accel::build(&scene.mesh.positions, &scene.mesh.indices);
-    (scene, accel)
-}
-
 /// Direct light on the GPU (`Device::Gpu`) against the CPU (`Device::Auto`, which makes the
 /// same shadow maps and computes the direct light on the CPU) for ring, bunny and dragon (point
 /// lights: cube maps) and the ring under a spot and a directional light (perspective and
@@ -62,13 +48,9 @@ fn direct_light_on_the_gpu_matches_the_cpu() {
         let (s, a) = common::scene_and_accel(name);
         cases.push((name.to_string(), s, a));
     }
-    let (s, a) = ring_with(
-        "type = \"spot\"\nposition = [-4.5, 2.1, 0.0]\ndirection = [4.5, -2.1, 0.0]\nintensity = [60.0, 60.0, 60.0]\ncone_angle = 20.0\nfalloff_angle = 12.0",
-    );
+    let (s, a) = common::ring_with(common::RING_SPOT);
     cases.push(("ring under a spot".into(), s, a));
-    let (s, a) = ring_with(
-        "type = \"directional\"\ndirection = [4.5, -2.1, 0.0]\nirradiance = [2.4, 2.4, 2.4]",
-    );
+    let (s, a) = common::ring_with(common::RING_SUN);
     cases.push(("ring under a directional light".into(), s, a));
     for (name, scene, accel) in &cases {
         let (cpu_img, cpu_stats) = direct_render(scene, accel, Device::Auto);

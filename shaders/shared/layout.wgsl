@@ -60,9 +60,9 @@ struct GpuVsmFace {
     right: vec3<f32>,
     far: f32,
     up: vec3<f32>,
-    _pad0: f32,
+    scale: f32,
     light: vec3<f32>,
-    _pad1: f32,
+    orthographic: u32,
 }
 
 // The shadow-map blur's uniform.
@@ -282,6 +282,26 @@ struct GpuShadowMap {
     forward: array<vec4<f32>, 6>,
     right: array<vec4<f32>, 6>,
     up: array<vec4<f32>, 6>,
+}
+
+// A reflector triangle VPLs can sit on (`render::gpu::vpl_gen`).
+struct GpuVplSource {
+    v0: vec3<f32>,
+    _pad0: u32,
+    v1: vec3<f32>,
+    _pad1: u32,
+    v2: vec3<f32>,
+    _pad2: u32,
+    albedo: vec3<f32>,
+    _pad3: u32,
+}
+
+// The VPL-weight pass's uniform (`render::gpu::vpl_gen`).
+struct GpuVplGenParams {
+    count: u32,
+    eps: f32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // The direct-light pass's uniform (`render::gpu::direct`).

@@ -460,8 +460,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
     // The point light's shadow map: rasterised on the GPU against ray-cast on the CPU.
     let _ = writeln!(
         md,
-        "Variance shadow maps of the point light (six 512² faces, blur radius 2): \
-         `render::gpu::vsm::ShadowMapper` (rasterised, `shaders/vsm.wgsl` + \
+        "Variance shadow maps (512² faces, blur radius 2) of each scene's point light (six \
+         faces) and, on the ring, of a 20° spot and a directional light in its place (one \
+         perspective face, one orthographic face): `render::gpu::vsm::ShadowMapper` \
+         (rasterised, `shaders/vsm.wgsl` + \
          `shaders/vsm_blur.wgsl`, read back to the CPU) against its twin \
          `VarianceShadowMap::build` (a ray per texel through the BVH, all threads), in this \
          process, best of three. The wall time includes uploads, dispatch and read-back; the \
@@ -469,7 +471,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
     );
     let _ = writeln!(
         md,
-        "| scene | triangles | GPU setup (compile, upload; once) | GPU per map (wall) | of which GPU passes: raster / blur (timestamps) | CPU per map | CPU ÷ GPU per map |\n|---|---|---|---|---|---|---|"
+        "| scene, light | triangles | GPU setup (compile, upload; once) | GPU per map (wall) | of which GPU passes: raster / blur (timestamps) | CPU per map | CPU ÷ GPU per map |\n|---|---|---|---|---|---|---|"
     );
     // (wall, blur timestamps) at blur radius 2 and 8 on the first scene, to check the timestamps.
     let mut radius_check: Option<[(f64, f64); 2]> = None;
@@ -488,83 +490,110 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
                     blur: 2,
                     light_bleeding: 0.2,
                 };
-                let light = sc.lights[0];
-                let best = |f: &mut dyn FnMut()| {
-                    (0..3)
-                        .map(|_| {
-                            let t = Instant::now();
-                            f();
-                            t.elapsed().as_secs_f64()
-                        })
-                        .fold(f64::INFINITY, f64::min)
-                };
-                let mut map = None;
-                let tc = best(&mut || {
-                    map = Some(interreflect::visibility::vsm::VarianceShadowMap::build(
-                        &accel,
-                        sc.mesh.bounds(),
-                        &light,
-                        &opts,
-                    ))
-                });
-                let Some(setup) = map.as_ref().and_then(|m| m.cube_setup()) else {
-                    let _ = writeln!(md, "| {scene} | not a point light | | | | | |");
-                    continue;
-                };
-                let t0 = Instant::now();
-                let mapper = interreflect::render::gpu::vsm::ShadowMapper::new(
-                    &gpu,
-                    &sc.mesh.positions,
-                    &sc.mesh.indices,
-                )
-                .map_err(|e| anyhow::anyhow!("shadow map on the GPU: {e}"))?;
-                let t_setup = t0.elapsed().as_secs_f64();
-                let mut err = None;
-                let mut passes: Option<interreflect::render::gpu::vsm::PassTimes> = None;
-                let tg = best(&mut || match mapper.cube_moments_timed(&setup, opts.blur) {
-                    Ok((_, t)) => {
-                        if let Some(t) = t
-                            && passes.is_none_or(|p| t.raster + t.blur < p.raster + p.blur)
-                        {
-                            passes = Some(t);
-                        }
-                    }
-                    Err(e) => err = Some(e.to_string()),
-                });
-                if let Some(e) = err {
-                    bail!("shadow map on the GPU: {e}");
+                let mut lights = vec![("point", sc.lights[0])];
+                if let interreflect::scene::Light::Point {
+                    position,
+                    intensity,
+                } = sc.lights[0]
+                    && sc.name == "ring"
+                {
+                    let (lo, hi) = sc.mesh.bounds();
+                    let direction = (0.5 * (lo + hi) - position).normalize();
+                    lights.push((
+                        "spot",
+                        interreflect::scene::Light::Spot {
+                            position,
+                            direction,
+                            intensity,
+                            cos_cone: 20f32.to_radians().cos(),
+                            cos_falloff: 12f32.to_radians().cos(),
+                        },
+                    ));
+                    lights.push((
+                        "directional",
+                        interreflect::scene::Light::Directional {
+                            direction,
+                            irradiance: glam::Vec3::splat(2.4),
+                        },
+                    ));
                 }
-                if radius_check.is_none() {
-                    let at = |radius: u32| -> anyhow::Result<(f64, f64)> {
-                        let mut out = (f64::INFINITY, f64::NAN);
-                        for _ in 0..3 {
-                            let t = Instant::now();
-                            let (_, p) = mapper
-                                .cube_moments_timed(&setup, radius)
-                                .map_err(|e| anyhow::anyhow!("shadow map on the GPU: {e}"))?;
-                            let wall = t.elapsed().as_secs_f64();
-                            if wall < out.0 {
-                                out = (wall, p.map_or(f64::NAN, |p| p.blur));
+                for (kind, light) in lights {
+                    let best = |f: &mut dyn FnMut()| {
+                        (0..3)
+                            .map(|_| {
+                                let t = Instant::now();
+                                f();
+                                t.elapsed().as_secs_f64()
+                            })
+                            .fold(f64::INFINITY, f64::min)
+                    };
+                    let mut map = None;
+                    let tc = best(&mut || {
+                        map = Some(interreflect::visibility::vsm::VarianceShadowMap::build(
+                            &accel,
+                            sc.mesh.bounds(),
+                            &light,
+                            &opts,
+                        ))
+                    });
+                    let Some(setup) = map.as_ref().map(|m| m.setup()) else {
+                        continue;
+                    };
+                    let t0 = Instant::now();
+                    let mapper = interreflect::render::gpu::vsm::ShadowMapper::new(
+                        &gpu,
+                        &sc.mesh.positions,
+                        &sc.mesh.indices,
+                    )
+                    .map_err(|e| anyhow::anyhow!("shadow map on the GPU: {e}"))?;
+                    let t_setup = t0.elapsed().as_secs_f64();
+                    let mut err = None;
+                    let mut passes: Option<interreflect::render::gpu::vsm::PassTimes> = None;
+                    let tg = best(&mut || match mapper.map_moments_timed(&setup, opts.blur) {
+                        Ok((_, t)) => {
+                            if let Some(t) = t
+                                && passes.is_none_or(|p| t.raster + t.blur < p.raster + p.blur)
+                            {
+                                passes = Some(t);
                             }
                         }
-                        Ok(out)
-                    };
-                    radius_check = Some([at(2)?, at(8)?]);
+                        Err(e) => err = Some(e.to_string()),
+                    });
+                    if let Some(e) = err {
+                        bail!("shadow map on the GPU: {e}");
+                    }
+                    if radius_check.is_none() {
+                        let at = |radius: u32| -> anyhow::Result<(f64, f64)> {
+                            let mut out = (f64::INFINITY, f64::NAN);
+                            for _ in 0..3 {
+                                let t = Instant::now();
+                                let (_, p) = mapper
+                                    .map_moments_timed(&setup, radius)
+                                    .map_err(|e| anyhow::anyhow!("shadow map on the GPU: {e}"))?;
+                                let wall = t.elapsed().as_secs_f64();
+                                if wall < out.0 {
+                                    out = (wall, p.map_or(f64::NAN, |p| p.blur));
+                                }
+                            }
+                            Ok(out)
+                        };
+                        radius_check = Some([at(2)?, at(8)?]);
+                    }
+                    eprintln!("{kind}: CPU ÷ GPU {:.2}", tc / tg);
+                    let stages = passes
+                        .map(|p| format!("{:.1} / {:.1} ms", p.raster * 1e3, p.blur * 1e3))
+                        .unwrap_or_else(|| "no timestamps".into());
+                    let _ = writeln!(
+                        md,
+                        "| {}, {kind} | {} | {:.0} ms | {:.0} ms | {stages} | {:.0} ms | {:.2}× |",
+                        sc.name,
+                        sc.mesh.indices.len(),
+                        t_setup * 1e3,
+                        tg * 1e3,
+                        tc * 1e3,
+                        tc / tg
+                    );
                 }
-                eprintln!("CPU ÷ GPU {:.2}", tc / tg);
-                let stages = passes
-                    .map(|p| format!("{:.1} / {:.1} ms", p.raster * 1e3, p.blur * 1e3))
-                    .unwrap_or_else(|| "no timestamps".into());
-                let _ = writeln!(
-                    md,
-                    "| {} | {} | {:.0} ms | {:.0} ms | {stages} | {:.0} ms | {:.2}× |",
-                    sc.name,
-                    sc.mesh.indices.len(),
-                    t_setup * 1e3,
-                    tg * 1e3,
-                    tc * 1e3,
-                    tc / tg
-                );
             }
         }
         Err(e) => {
@@ -675,7 +704,7 @@ fn gpu_bench(args: &BenchArgs) -> anyhow::Result<i32> {
         md,
         "Stages on the GPU with `--device gpu`: the shadow maps (both columns), sg's shading \
          over the vertex cuts (`sg_shade`, `sg_shade_sum`), the VPL baseline's sum (`vpl`), \
-         the direct light (`direct`) and the PNG's tonemap. The GPU stages' time is wall time \
+         the direct light (`direct`), the VPLs' sampling weights (`vpl_gen`, vpl only) and the PNG's tonemap. The GPU stages' time is wall time \
          around the passes (gathering, uploads, dispatches, read-back); the pixel loop that \
          follows only adds up their results. \
          Per-pass GPU timestamps are not given: lavapipe's timestamps do not bracket compute \

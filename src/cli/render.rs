@@ -522,6 +522,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         shadow_map_fallback(&args, &stats.shadow_maps_on)?;
         gpu_shading_fallback(&args, &stats.indirect_on)?;
         gpu_direct_fallback(&args, &stats.direct_on)?;
+        gpu_vpls_fallback(&args, &stats.vpls_on)?;
         log(format!(
             "vpl: {} VPLs, clamp distance {:.4} ({} of {} pairs clamped), {} visibility rays",
             stats.vpls,
@@ -592,6 +593,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         shadow_map_fallback(&args, &stats.shadow_maps_on)?;
         gpu_shading_fallback(&args, &stats.shading_on)?;
         gpu_direct_fallback(&args, &stats.direct_on)?;
+        gpu_vpls_fallback(&args, &stats.vpls_on)?;
         let s = &stats;
         log(format!(
             "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
@@ -899,6 +901,15 @@ fn gpu_direct_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
         on,
         "the direct light could not be computed on the GPU",
         "direct light computed on the CPU",
+    )
+}
+
+fn gpu_vpls_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
+    gpu_fallback(
+        args,
+        on,
+        "the VPLs' weights could not be computed on the GPU",
+        "VPLs' weights computed on the CPU",
     )
 }
 

@@ -74,6 +74,29 @@ fn lit_irradiance(light: &Light, v: [Vec3; 3], p: Vec3) -> Option<(Vec3, Vec3, V
     (e != Vec3::ZERO).then_some((n, inc.wi, e))
 }
 
+fn area(v: [Vec3; 3]) -> f32 {
+    0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
+}
+
+/// The weight each source is sampled by under `light`, A_t ρ_t Ē_t (0.1 + 0.9 V_t) at its
+/// centroid (0 where the light does not reach it); `visible` as for [`generate`]. The GPU twin
+/// is `render::gpu::vpl_gen` (`shaders/vpl_gen.wgsl`), for lights with a shadow map.
+pub fn source_weights(
+    sources: &[VplSource],
+    light: &Light,
+    visible: &(dyn Fn(Vec3) -> f32 + Sync),
+) -> Vec<f32> {
+    sources
+        .iter()
+        .map(|s| {
+            let c = (s.vertices[0] + s.vertices[1] + s.vertices[2]) / 3.0;
+            lit_irradiance(light, s.vertices, c).map_or(0.0, |(_, _, e)| {
+                area(s.vertices) * luminance(e * s.albedo) * (0.1 + 0.9 * visible(c))
+            })
+        })
+        .collect()
+}
+
 /// `count` VPLs of `light` on `sources`, from the keyed random stream `seed`; `visible(p)` is
 /// the light's visibility in [0, 1] at a surface point (a shadow ray or a shadow map). Empty
 /// when nothing is lit.
@@ -84,23 +107,27 @@ pub fn generate(
     seed: u64,
     visible: &(dyn Fn(Vec3) -> f32 + Sync),
 ) -> Vec<Vpl> {
-    let area = |v: [Vec3; 3]| 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
-    let weights: Vec<f32> = sources
-        .iter()
-        .map(|s| {
-            let c = (s.vertices[0] + s.vertices[1] + s.vertices[2]) / 3.0;
-            lit_irradiance(light, s.vertices, c).map_or(0.0, |(_, _, e)| {
-                area(s.vertices) * luminance(e * s.albedo) * (0.1 + 0.9 * visible(c))
-            })
-        })
-        .collect();
+    let weights = source_weights(sources, light, visible);
+    generate_weighted(sources, &weights, light, count, seed, visible)
+}
+
+/// [`generate`] from the sources' weights ([`source_weights`], or its GPU twin).
+pub fn generate_weighted(
+    sources: &[VplSource],
+    weights: &[f32],
+    light: &Light,
+    count: usize,
+    seed: u64,
+    visible: &(dyn Fn(Vec3) -> f32 + Sync),
+) -> Vec<Vpl> {
+    debug_assert_eq!(weights.len(), sources.len());
     // The VPLs are shared out equally over the groups that reflect anything (the remainder to
     // the first ones), and sampled by flux within each: a small bright reflector keeps VPLs
     // of its own beside a large floor. The power stays unbiased (P_t = P_t|group / share).
     let groups: Vec<u32> = {
         let mut g: Vec<u32> = sources
             .iter()
-            .zip(&weights)
+            .zip(weights)
             .filter(|(_, w)| **w > 0.0)
             .map(|(s, _)| s.group)
             .collect();
@@ -120,7 +147,7 @@ pub fn generate(
         }
         let w: Vec<f32> = sources
             .iter()
-            .zip(&weights)
+            .zip(weights)
             .map(|(s, &w)| if s.group == group { w } else { 0.0 })
             .collect();
         let dist = Distribution1D::new(&w);

@@ -15,7 +15,8 @@
 //! spot lights (a cube when the cone is wider than 120°), an orthographic box around the scene
 //! for directional lights. Depth is the distance to the light (point, spot) or along the
 //! light's direction (directional). On the CPU the map is made by casting one ray per texel
-//! through the BVH (the GPU pipeline rasterises it); a texel that sees nothing holds a far depth.
+//! through the BVH (the GPU pipeline rasterises it, every projection: `render::gpu::vsm`); a
+//! texel that sees nothing holds a far depth.
 
 use crate::accel::Accel;
 use crate::scene::Light;
@@ -93,18 +94,23 @@ pub struct VarianceShadowMap {
     far: f32,
 }
 
-/// A cube rasteriser for [`VarianceShadowMap::build_with`]: the six faces' moments of a setup,
-/// blurred with the given radius, or `None` to fall back to casting rays.
-pub type CubeRaster<'a> = dyn Fn(&CubeSetup, u32) -> Option<Vec<Vec2>> + 'a;
+/// A shadow-map rasteriser for [`VarianceShadowMap::build_with`]: the faces' moments of a
+/// setup, blurred with the given radius, or `None` to fall back to casting rays.
+pub type MapRaster<'a> = dyn Fn(&MapSetup, u32) -> Option<Vec<Vec2>> + 'a;
 
-/// What a GPU needs to rasterise the same cube map as [`VarianceShadowMap::build`]: the light's
-/// position, each face's (forward, right, up), the face coordinates the texels span, the depth
-/// of empty texels and the resolution. Texel (i, j) of a face looks along
-/// forward + right·u + up·v with u, v = (2 (i, j) + 1)/res − 1, times `margin`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CubeSetup {
+/// What a GPU needs to rasterise the same map as [`VarianceShadowMap::build`]: the projection,
+/// each face's (forward, right, up), the face coordinates the texels span, the depth of empty
+/// texels and the resolution. With u, v = ((2 (i, j) + 1)/res − 1) · `margin`, texel (i, j) of
+/// a face sees, in perspective, along forward + (right·u + up·v) · `scale` from `position`
+/// (a point light's cube: `scale` 1; a spot's one face: tan of its half-angle), depth the
+/// distance to `position`; orthographically, along forward from position + (right·u + up·v) ·
+/// `scale` (the box's half-extent), depth the distance along forward.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapSetup {
+    pub orthographic: bool,
     pub position: Vec3,
-    pub faces: [(Vec3, Vec3, Vec3); 6],
+    pub scale: f32,
+    pub faces: Vec<(Vec3, Vec3, Vec3)>,
     pub margin: f32,
     pub far: f32,
     pub resolution: u32,
@@ -165,15 +171,15 @@ impl VarianceShadowMap {
         Self::build_with(accel, bounds, light, opts, None)
     }
 
-    /// [`Self::build`], with a point light's cube rasterised by `raster` when given: it returns
-    /// the six faces' moments, already blurred with `opts.blur` (`render::gpu::vsm`), or `None`
-    /// to fall back to casting rays.
+    /// [`Self::build`], with the map rasterised by `raster` when given: it returns the faces'
+    /// moments, already blurred with `opts.blur` (`render::gpu::vsm`), or `None` to fall back
+    /// to casting rays.
     pub fn build_with(
         accel: &Accel,
         bounds: (Vec3, Vec3),
         light: &Light,
         opts: &VsmOptions,
-        raster: Option<&CubeRaster<'_>>,
+        raster: Option<&MapRaster<'_>>,
     ) -> Self {
         let (lo, hi) = bounds;
         let centre = 0.5 * (lo + hi);
@@ -228,8 +234,7 @@ impl VarianceShadowMap {
             far,
         };
         let rasterised = raster
-            .zip(map.cube_setup())
-            .and_then(|(raster, setup)| raster(&setup, opts.blur))
+            .and_then(|raster| raster(&map.setup(), opts.blur))
             .filter(|m| m.len() == map.faces.len() * n * n);
         map.moments = match rasterised {
             Some(m) => m,
@@ -286,22 +291,26 @@ impl VarianceShadowMap {
         self.res
     }
 
-    /// The cube's geometry, for a point light (or a wide spot); `None` for other projections.
-    pub fn cube_setup(&self) -> Option<CubeSetup> {
-        let Projection::Cube { position } = self.projection else {
-            return None;
+    /// The map's geometry, for a rasteriser.
+    pub fn setup(&self) -> MapSetup {
+        let (orthographic, position, scale) = match self.projection {
+            Projection::Cube { position } => (false, position, 1.0),
+            Projection::Perspective { position, tan_half } => (false, position, tan_half),
+            Projection::Ortho { origin, half } => (true, origin, half),
         };
-        let mut faces = [(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO); 6];
-        for (out, f) in faces.iter_mut().zip(&self.faces) {
-            *out = (f.forward, f.right, f.up);
-        }
-        Some(CubeSetup {
+        MapSetup {
+            orthographic,
             position,
-            faces,
+            scale,
+            faces: self
+                .faces
+                .iter()
+                .map(|f| (f.forward, f.right, f.up))
+                .collect(),
             margin: self.margin,
             far: self.far,
             resolution: self.res,
-        })
+        }
     }
 
     /// What the GPU reads (`render::gpu::direct`).

@@ -58,6 +58,49 @@ pub fn scene_and_accel(name: &str) -> (interreflect::scene::Scene, interreflect:
     (scene, accel)
 }
 
+/// The ring with its point light replaced by `light` (TOML): a spot or a directional light.
+#[allow(dead_code)] // Not every test binary that shares this module needs it.
+pub fn ring_with(light: &str) -> (interreflect::scene::Scene, interreflect::accel::Accel) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ring.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let point = "type = \"point\"\nposition = [-4.5, 2.1, 0.0]\nintensity = [60.0, 60.0, 60.0]";
+    assert!(text.contains(point), "the ring's light changed");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("ring.toml");
+    std::fs::write(&file, text.replace(point, light)).unwrap();
+    let scene = interreflect::scene::Scene::load(&file).unwrap();
+    let accel = interreflect::accel::Accel::build(&scene.mesh.positions, &scene.mesh.indices);
+    (scene, accel)
+}
+
+/// The light cases of the GPU shadow-map passes' tests: ring, bunny and dragon (point lights)
+/// and the ring under [`RING_SPOT`] and [`RING_SUN`].
+#[allow(dead_code)]
+pub fn light_cases() -> Vec<(
+    &'static str,
+    interreflect::scene::Scene,
+    interreflect::accel::Accel,
+)> {
+    let mut cases = Vec::new();
+    for name in ["ring", "bunny", "dragon"] {
+        let (s, a) = scene_and_accel(name);
+        cases.push((name, s, a));
+    }
+    let (s, a) = ring_with(RING_SPOT);
+    cases.push(("ring under a spot", s, a));
+    let (s, a) = ring_with(RING_SUN);
+    cases.push(("ring under a directional light", s, a));
+    cases
+}
+
+/// The ring under a spot aimed as its point light shines (a 20° cone: one perspective face).
+#[allow(dead_code)]
+pub const RING_SPOT: &str = "type = \"spot\"\nposition = [-4.5, 2.1, 0.0]\ndirection = [4.5, -2.1, 0.0]\nintensity = [60.0, 60.0, 60.0]\ncone_angle = 20.0\nfalloff_angle = 12.0";
+/// The ring under a directional light from its point light's side (an orthographic face).
+#[allow(dead_code)]
+pub const RING_SUN: &str =
+    "type = \"directional\"\ndirection = [4.5, -2.1, 0.0]\nirradiance = [2.4, 2.4, 2.4]";
+
 /// `interreflect render SCENE ARGS --quiet --output DIR/NAME.exr` with a private
 /// `XDG_RUNTIME_DIR`, for the tests that run the renderer as a user does: checks that it exits
 /// 0 and returns its stderr and its JSON log.

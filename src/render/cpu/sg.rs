@@ -107,6 +107,12 @@ pub struct SgStats {
     /// shadow map for every light), or "cpu (why the GPU failed)"; empty without direct light.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub direct_on: String,
+    /// Where the VPLs' sampling weights were computed (`--visibility approx` with the VPLs'
+    /// imperfect shadow maps, `node_maps = 0`):
+    /// "cpu", "gpu (adapter)" (`--device gpu` with shadow maps), or "cpu (why the GPU
+    /// failed)"; empty without VPLs.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub vpls_on: String,
     /// Per light, what the GPU shading uploaded (empty on the CPU).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub gpu_uploads: Vec<crate::render::gpu::sg_shade::ShadeUpload>,
@@ -461,26 +467,24 @@ pub fn render_sg_prepared(
                     })
                     .collect()
             } else {
-                let sources = vpl::sources(scene);
-                scene
-                    .lights
-                    .iter()
-                    .zip(&maps)
+                let (vpls, place) = scene_vpls(
+                    scene,
+                    accel,
+                    &maps,
+                    scene.settings.vpl_count as usize,
+                    opts.seed,
+                    eps,
+                    opts.device,
+                );
+                stats.vpls_on = place;
+                vpls.iter()
                     .enumerate()
-                    .map(|(k, (light, map))| {
-                        let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
-                        let vpls = vpl::generate(
-                            &sources,
-                            light,
-                            scene.settings.vpl_count as usize,
-                            opts.seed ^ k as u64,
-                            &visible,
-                        );
+                    .map(|(k, vpls)| {
                         Some(ApproxVisibility::nearest_vpls(
                             scene,
                             tree,
                             pieces,
-                            &vpls,
+                            vpls,
                             opts.seed ^ k as u64,
                         ))
                     })
@@ -673,8 +677,9 @@ fn shade_frame(
 /// the light), or the lit fraction of the light's variance shadow map at the same offset point.
 /// One variance shadow map per light, or none for each with `Visibility::Exact`.
 ///
-/// With `device` other than [`Device::Cpu`], a point light's cube is rasterised on the GPU
-/// (`render::gpu::vsm`); the returned string says where the maps were made ("cpu", "gpu (adapter
+/// With `device` other than [`Device::Cpu`], the maps are rasterised on the GPU
+/// (`render::gpu::vsm`: a point light's cube, a spot's face, a directional light's orthographic
+/// face); the returned string says where the maps were made ("cpu", "gpu (adapter
 /// name)", or "cpu (the GPU failed: …)" when `Device::Auto` fell back).
 pub(super) fn shadow_maps(
     scene: &Scene,
@@ -685,12 +690,8 @@ pub(super) fn shadow_maps(
     if visibility == Visibility::Exact {
         return (scene.lights.iter().map(|_| None).collect(), String::new());
     }
-    let point_lights = scene
-        .lights
-        .iter()
-        .any(|l| matches!(l, crate::scene::Light::Point { .. }));
     let mut place = "cpu".to_string();
-    let gpu = if device == Device::Cpu || !point_lights {
+    let gpu = if device == Device::Cpu || scene.lights.is_empty() {
         None
     } else {
         match crate::render::gpu::Gpu::shared() {
@@ -715,8 +716,8 @@ pub(super) fn shadow_maps(
         }
     });
     let failure = std::cell::Cell::new(None::<String>);
-    let raster = |setup: &crate::visibility::vsm::CubeSetup, blur: u32| {
-        let moments = mapper.as_ref()?.cube_moments(setup, blur);
+    let raster = |setup: &crate::visibility::vsm::MapSetup, blur: u32| {
+        let moments = mapper.as_ref()?.map_moments(setup, blur);
         moments.map_err(|e| failure.set(Some(e.to_string()))).ok()
     };
     let maps = scene
@@ -730,7 +731,7 @@ pub(super) fn shadow_maps(
                 &scene.settings.vsm,
                 mapper
                     .is_some()
-                    .then_some(&raster as &crate::visibility::vsm::CubeRaster<'_>),
+                    .then_some(&raster as &crate::visibility::vsm::MapRaster<'_>),
             ))
         })
         .collect();
@@ -814,6 +815,68 @@ pub(super) fn direct_on_gpu(
         Ok(None) => None,
         Err(e) => Some((format!("cpu (the GPU failed: {e})"), None)),
     }
+}
+
+/// The VPLs of every light (`vpl::generate`, `count` each, seeds `seed ^ k`), their visibility
+/// from the light's shadow map or shadow rays. With `--device gpu` and a shadow map, the
+/// sources' weights are computed on the GPU (`render::gpu::vpl_gen`) and the VPLs drawn from
+/// them on the CPU. Also says where the weights were computed ("cpu", "gpu (adapter)", or
+/// "cpu (the GPU failed: …)").
+#[allow(clippy::too_many_arguments)]
+pub(super) fn scene_vpls(
+    scene: &Scene,
+    accel: &Accel,
+    maps: &[Option<VarianceShadowMap>],
+    count: usize,
+    seed: u64,
+    eps: f32,
+    device: Device,
+) -> (Vec<Vec<Vpl>>, String) {
+    let sources = vpl::sources(scene);
+    let mut place = "cpu".to_string();
+    let vpls = scene
+        .lights
+        .iter()
+        .zip(maps)
+        .enumerate()
+        .map(|(k, (light, map))| {
+            let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
+            let seed = seed ^ k as u64;
+            let gpu_weights = match (device, map) {
+                (Device::Gpu, Some(m)) => {
+                    let run = || -> Result<(Vec<f32>, String), crate::render::gpu::GpuError> {
+                        let gpu = crate::render::gpu::Gpu::shared()?;
+                        let w = crate::render::gpu::vpl_gen::source_weights(
+                            &gpu,
+                            &sources,
+                            light,
+                            Some(m),
+                            eps,
+                        )?;
+                        Ok((w, gpu.adapter.clone()))
+                    };
+                    match run() {
+                        Ok((w, adapter)) => {
+                            if !place.starts_with("cpu (") {
+                                place = format!("gpu ({adapter})");
+                            }
+                            Some(w)
+                        }
+                        Err(e) => {
+                            place = format!("cpu (the GPU failed: {e})");
+                            None
+                        }
+                    }
+                }
+                _ => None,
+            };
+            match gpu_weights {
+                Some(w) => vpl::generate_weighted(&sources, &w, light, count, seed, &visible),
+                None => vpl::generate(&sources, light, count, seed, &visible),
+            }
+        })
+        .collect();
+    (vpls, place)
 }
 
 /// The light's visibility at surface point `p`: a shadow ray (0 or 1), or the shadow map.

@@ -23,15 +23,13 @@
 //! (docs/gpu.md).
 
 use super::reference::Progress;
-use super::sg::{
-    direct_light, direct_on_gpu, light_fraction, primary_hit, primary_hits, shadow_maps,
-};
+use super::sg::{direct_light, direct_on_gpu, primary_hit, primary_hits, scene_vpls, shadow_maps};
 use super::surface::{SurfacePoint, gpu_points, ray_epsilon, scatter};
 use crate::accel::{Accel, Hit};
 use crate::brdf::Brdf;
 use crate::image::Image;
 use crate::math::{Frame, triangle_barycentrics};
-use crate::precompute::vpl::{self, Vpl};
+use crate::precompute::vpl::Vpl;
 use crate::render::Device;
 use crate::render::Visibility;
 use crate::render::gpu::layout::GpuVpl;
@@ -102,6 +100,10 @@ pub struct VplStats {
     /// shadow map for every light), or "cpu (why the GPU failed)"; empty without direct light.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub direct_on: String,
+    /// Where the VPLs' sampling weights were computed: "cpu", "gpu (adapter)" (`--device gpu`
+    /// with shadow maps), or "cpu (why the GPU failed)"; empty without indirect light.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub vpls_on: String,
     /// VPLs of all lights.
     pub vpls: usize,
     pub clamp_distance: f32,
@@ -177,23 +179,16 @@ pub fn render_vpl(
     let mut lights: Vec<LightVpls> = Vec::new();
     if opts.indirect {
         let t = Instant::now();
-        let sources = vpl::sources(scene);
-        let vpls: Vec<Vec<Vpl>> = scene
-            .lights
-            .iter()
-            .zip(&maps)
-            .enumerate()
-            .map(|(k, (light, map))| {
-                let visible = |p: Vec3| light_fraction(accel, light, map.as_ref(), p, eps);
-                vpl::generate(
-                    &sources,
-                    light,
-                    opts.vpl_count as usize,
-                    opts.seed ^ k as u64,
-                    &visible,
-                )
-            })
-            .collect();
+        let (vpls, place) = scene_vpls(
+            scene,
+            accel,
+            &maps,
+            opts.vpl_count as usize,
+            opts.seed,
+            eps,
+            opts.device,
+        );
+        stats.vpls_on = place;
         stats.seconds.vpls = t.elapsed().as_secs_f64();
         let t = Instant::now();
         for (k, vs) in vpls.into_iter().enumerate() {

@@ -47,6 +47,35 @@ impl GpuShadowMap {
     }
 }
 
+/// The lights, their maps and the maps' texels as the passes that read shadow maps bind them
+/// (`shaders/parts/shadow_map.wgsl`): light k's `map` indexes `maps[k]`'s entry, or is `NONE`.
+/// Never empty (an unused map and texel stand in), since empty buffers cannot be bound.
+#[allow(clippy::type_complexity)]
+pub(crate) fn light_buffers(
+    lights: &[Light],
+    maps: &[Option<&VarianceShadowMap>],
+) -> Result<(Vec<GpuLight>, Vec<GpuShadowMap>, Vec<[f32; 2]>), String> {
+    let mut gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+    let mut gpu_maps = Vec::new();
+    let mut moments: Vec<[f32; 2]> = Vec::new();
+    for (k, m) in maps.iter().enumerate().take(lights.len()) {
+        if let Some(m) = m {
+            if moments.len() > u32::MAX as usize {
+                return Err("the shadow maps hold more than 2^32 texels".into());
+            }
+            let parts = m.parts();
+            gpu_lights[k].map = gpu_maps.len() as u32;
+            gpu_maps.push(GpuShadowMap::new(&parts, moments.len() as u32));
+            moments.extend(parts.moments.iter().map(|t| t.to_array()));
+        }
+    }
+    if gpu_maps.is_empty() {
+        gpu_maps.push(GpuShadowMap::default());
+        moments.push([0.0; 2]);
+    }
+    Ok((gpu_lights, gpu_maps, moments))
+}
+
 /// The direct light at every point, summed over `lights` (`maps[k]` the shadow map of light
 /// k; a light without one counts as unshadowed, so callers pass a map for every light);
 /// `materials` are the scene's BRDFs, `eps` its ray epsilon. Points whose eye direction is
@@ -70,25 +99,8 @@ pub fn direct(
     {
         return Err(failed(format!("point {i} has no material")));
     }
-    let mut gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
-    let mut gpu_maps = Vec::new();
-    let mut moments: Vec<[f32; 2]> = Vec::new();
-    for (k, m) in maps.iter().enumerate().take(lights.len()) {
-        if let Some(m) = m {
-            if moments.len() > u32::MAX as usize {
-                return Err(failed("the shadow maps hold more than 2^32 texels"));
-            }
-            let parts = m.parts();
-            gpu_lights[k].map = gpu_maps.len() as u32;
-            gpu_maps.push(GpuShadowMap::new(&parts, moments.len() as u32));
-            moments.extend(parts.moments.iter().map(|t| t.to_array()));
-        }
-    }
-    // Empty buffers cannot be bound: one unused map and texel without maps.
-    if gpu_maps.is_empty() {
-        gpu_maps.push(GpuShadowMap::default());
-        moments.push([0.0; 2]);
-    }
+    let maps: Vec<Option<&VarianceShadowMap>> = maps.iter().map(Option::as_ref).collect();
+    let (gpu_lights, gpu_maps, moments) = light_buffers(lights, &maps).map_err(failed)?;
     let gpu_materials: Vec<GpuBrdf> = materials.iter().map(GpuBrdf::from).collect();
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);

@@ -80,7 +80,7 @@ pub struct GpuReceiver {
     pub lobes: [GpuSg; 4],
 }
 
-/// One face of a point light's cube shadow map (`super::vsm`).
+/// One face of a light's shadow map (`super::vsm`): a cube face, a spot's or an orthographic face.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuVsmFace {
@@ -89,9 +89,13 @@ pub struct GpuVsmFace {
     pub right: [f32; 3],
     pub far: f32,
     pub up: [f32; 3],
-    pub _pad0: f32,
+    /// Face coordinates per unit of (right, up): 1 for a cube face, tan of a spot's
+    /// half-angle, an orthographic box's half-extent (`visibility::vsm::MapSetup`).
+    pub scale: f32,
+    /// The light's position, or the orthographic box's origin.
     pub light: [f32; 3],
-    pub _pad1: f32,
+    /// 1: orthographic (depth along `forward`), 0: perspective (depth the distance).
+    pub orthographic: u32,
 }
 
 /// The shadow-map blur's uniform.
@@ -471,6 +475,32 @@ pub struct GpuShadowMap {
     pub up: [[f32; 4]; 6],
 }
 
+/// A reflector triangle VPLs can sit on (`precompute::vpl::VplSource`; `super::vpl_gen`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVplSource {
+    pub v0: [f32; 3],
+    pub _pad0: u32,
+    pub v1: [f32; 3],
+    pub _pad1: u32,
+    pub v2: [f32; 3],
+    pub _pad2: u32,
+    /// Diffuse + specular colour of its material.
+    pub albedo: [f32; 3],
+    pub _pad3: u32,
+}
+
+/// The VPL-weight pass's uniform (`super::vpl_gen`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVplGenParams {
+    pub count: u32,
+    /// The scene's ray epsilon: the shadow-map lookup is offset by it towards the light.
+    pub eps: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
 /// The direct-light pass's uniform (`super::direct`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -532,9 +562,9 @@ pub fn layouts() -> Vec<StructLayout> {
             right,
             far,
             up,
-            _pad0,
+            scale,
             light,
-            _pad1
+            orthographic
         }),
         layout!(GpuBlurParams {
             resolution,
@@ -724,6 +754,22 @@ pub fn layouts() -> Vec<StructLayout> {
             light_count,
             eps,
             _pad0
+        }),
+        layout!(GpuVplSource {
+            v0,
+            _pad0,
+            v1,
+            _pad1,
+            v2,
+            _pad2,
+            albedo,
+            _pad3
+        }),
+        layout!(GpuVplGenParams {
+            count,
+            eps,
+            _pad0,
+            _pad1
         }),
         layout!(GpuVplSum {
             radiance,

@@ -17,6 +17,7 @@ pub mod shaders;
 pub mod tonemap;
 pub mod twins;
 pub mod vpl;
+pub mod vpl_gen;
 pub mod vsm;
 pub mod window;
 

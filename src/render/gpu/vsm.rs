@@ -1,12 +1,14 @@
-//! A point light's variance shadow map on the GPU: each of the six cube faces is rasterised
-//! (`shaders/vsm.wgsl`: moments (z, z²) of the distance to the light, nearest surface kept by
-//! the depth test) and the faces are blurred (`shaders/vsm_blur.wgsl`, separable Gaussian).
-//! Rust twin: [`crate::visibility::vsm::VarianceShadowMap::build`], which casts a ray per texel
-//! centre; [`cube_moments`] returns the same texel layout, so the two compare texel by texel.
+//! A light's variance shadow map on the GPU: each face — the six of a point light's cube, a
+//! spot's one perspective face, a directional light's one orthographic face — is rasterised
+//! (`shaders/vsm.wgsl`: moments (z, z²) of the depth, the distance to the light or along its
+//! direction, nearest surface kept by the depth test) and the faces are blurred
+//! (`shaders/vsm_blur.wgsl`, separable Gaussian). Rust twin:
+//! [`crate::visibility::vsm::VarianceShadowMap::build`], which casts a ray per texel centre;
+//! [`map_moments`] returns the same texel layout, so the two compare texel by texel.
 
 use super::layout::{GpuBlurParams, GpuVsmFace};
 use super::{Gpu, GpuError, describe, f32s};
-use crate::visibility::vsm::CubeSetup;
+use crate::visibility::vsm::MapSetup;
 use glam::{Vec2, Vec3};
 use wgpu::util::DeviceExt;
 
@@ -17,21 +19,21 @@ fn failed(reason: impl Into<String>) -> GpuError {
     }
 }
 
-/// The moments of the six faces of `setup`'s cube over the triangles (`positions`, `indices`),
-/// blurred with `blur` texels of radius (0: none): face after face, rows from v = −1 up, as
+/// The moments of `setup`'s faces over the triangles (`positions`, `indices`), blurred with
+/// `blur` texels of radius (0: none): face after face, rows from v = −1 up, as
 /// [`crate::visibility::vsm::VarianceShadowMap::moments`].
-pub fn cube_moments(
+pub fn map_moments(
     gpu: &Gpu,
     positions: &[Vec3],
     indices: &[[u32; 3]],
-    setup: &CubeSetup,
+    setup: &MapSetup,
     blur: u32,
 ) -> Result<Vec<Vec2>, GpuError> {
-    ShadowMapper::new(gpu, positions, indices)?.cube_moments(setup, blur)
+    ShadowMapper::new(gpu, positions, indices)?.map_moments(setup, blur)
 }
 
 /// The shadow-map passes compiled and the scene's triangles uploaded, once; then
-/// [`ShadowMapper::cube_moments`] per frame (per light position).
+/// [`ShadowMapper::map_moments`] per frame (per light).
 pub struct ShadowMapper<'g> {
     gpu: &'g Gpu,
     pipeline: wgpu::RenderPipeline,
@@ -85,18 +87,18 @@ impl<'g> ShadowMapper<'g> {
         })
     }
 
-    /// The moments of the six faces of `setup`'s cube, blurred with `blur` texels of radius
-    /// (0: none): face after face, rows from v = −1 up, as
+    /// The moments of `setup`'s faces, blurred with `blur` texels of radius (0: none): face
+    /// after face, rows from v = −1 up, as
     /// [`crate::visibility::vsm::VarianceShadowMap::moments`].
-    pub fn cube_moments(&self, setup: &CubeSetup, blur: u32) -> Result<Vec<Vec2>, GpuError> {
-        Ok(self.cube_moments_timed(setup, blur)?.0)
+    pub fn map_moments(&self, setup: &MapSetup, blur: u32) -> Result<Vec<Vec2>, GpuError> {
+        Ok(self.map_moments_timed(setup, blur)?.0)
     }
 
-    /// [`Self::cube_moments`] and, when the device has timestamp queries, the GPU time of the
-    /// rasterisation (six passes) and of the blur (two passes), in seconds.
-    pub fn cube_moments_timed(
+    /// [`Self::map_moments`] and, when the device has timestamp queries, the GPU time of the
+    /// rasterisation (a pass per face) and of the blur (two passes), in seconds.
+    pub fn map_moments_timed(
         &self,
-        setup: &CubeSetup,
+        setup: &MapSetup,
         blur: u32,
     ) -> Result<(Vec<Vec2>, Option<PassTimes>), GpuError> {
         let gpu = self.gpu;
@@ -104,10 +106,14 @@ impl<'g> ShadowMapper<'g> {
         if n == 0 || n > 8192 {
             return Err(failed(format!("resolution {n}: must be 1 to 8192")));
         }
+        let faces = setup.faces.len();
+        if !(1..=6).contains(&faces) {
+            return Err(failed(format!("{faces} faces: must be 1 to 6")));
+        }
         let row_bytes = n as u64 * 8;
         // copy_texture_to_buffer needs rows aligned to 256 bytes.
         let padded_row = row_bytes.div_ceil(256) * 256;
-        if 6 * row_bytes * n as u64 > gpu.max_binding {
+        if faces as u64 * row_bytes * n as u64 > gpu.max_binding {
             return Err(failed(format!(
                 "{n}² texels per face exceed the largest binding ({} bytes)",
                 gpu.max_binding
@@ -116,7 +122,7 @@ impl<'g> ShadowMapper<'g> {
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let (pipeline, vertices, index_buf) = (&self.pipeline, &self.vertices, &self.index_buf);
-        let timer = super::Timer::new(gpu, 6);
+        let timer = super::Timer::new(gpu, faces as u32);
         let extent = wgpu::Extent3d {
             width: n,
             height: n,
@@ -142,7 +148,7 @@ impl<'g> ShadowMapper<'g> {
         let dense = padded_row == row_bytes;
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vsm faces"),
-            size: 6 * padded_row * n as u64,
+            size: faces as u64 * padded_row * n as u64,
             usage: wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::STORAGE,
@@ -158,8 +164,9 @@ impl<'g> ShadowMapper<'g> {
                 right: right.to_array(),
                 far,
                 up: up.to_array(),
+                scale: setup.scale,
                 light: setup.position.to_array(),
-                ..GpuVsmFace::default()
+                orthographic: setup.orthographic as u32,
             };
             let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("vsm face"),
@@ -231,17 +238,21 @@ impl<'g> ShadowMapper<'g> {
         let (raster, (moments, blur_time)) = if dense && blur > 0 {
             gpu.wait("shadow map")?;
             gpu.check("shadow map")?;
-            (raster_time(gpu)?, self.blur_buffer(&staging, n, blur)?)
+            (
+                raster_time(gpu)?,
+                self.blur_buffer(&staging, n, faces, blur)?,
+            )
         } else {
-            let bytes = gpu.read_back(&staging, 6 * padded_row * n as u64, "shadow map")?;
+            let bytes =
+                gpu.read_back(&staging, faces as u64 * padded_row * n as u64, "shadow map")?;
             gpu.check("shadow map")?;
             // Unpad the rows. The vertex shader maps v to NDC y = −v / margin, so the
             // framebuffer's row 0 (NDC y = +1) is v = −margin, the CPU's row 0: no flip.
             let floats = f32s(&bytes);
             let row_floats = (padded_row / 4) as usize;
             let n = n as usize;
-            let mut moments = vec![Vec2::ZERO; 6 * n * n];
-            for face in 0..6 {
+            let mut moments = vec![Vec2::ZERO; faces * n * n];
+            for face in 0..faces {
                 for row in 0..n {
                     let src = (face * n + row) * row_floats;
                     let dst = (face * n + row) * n;
@@ -253,7 +264,7 @@ impl<'g> ShadowMapper<'g> {
             let blurred = if blur == 0 {
                 (moments, Some(0.0))
             } else {
-                self.blur_faces(&moments, n as u32, blur)?
+                self.blur_faces(&moments, n as u32, faces, blur)?
             };
             (raster_time(gpu)?, blurred)
         };
@@ -263,11 +274,12 @@ impl<'g> ShadowMapper<'g> {
         Ok((moments, times))
     }
 
-    /// The separable blur of six n × n faces on the GPU (two dispatches).
+    /// The separable blur of `faces` n × n faces on the GPU (two dispatches).
     fn blur_faces(
         &self,
         moments: &[Vec2],
         n: u32,
+        faces: usize,
         radius: u32,
     ) -> Result<(Vec<Vec2>, Option<f64>), GpuError> {
         let a = self
@@ -278,14 +290,16 @@ impl<'g> ShadowMapper<'g> {
                 contents: bytemuck::cast_slice(moments),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             });
-        self.blur_buffer(&a, n, radius)
+        self.blur_buffer(&a, n, faces, radius)
     }
 
-    /// The blur of six dense n × n faces held in `a` (a storage buffer), in place, read back.
+    /// The blur of `faces` dense n × n faces held in `a` (a storage buffer), in place, read
+    /// back.
     fn blur_buffer(
         &self,
         a: &wgpu::Buffer,
         n: u32,
+        faces: usize,
         radius: u32,
     ) -> Result<(Vec<Vec2>, Option<f64>), GpuError> {
         let gpu = self.gpu;
@@ -293,7 +307,7 @@ impl<'g> ShadowMapper<'g> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = &self.blur_pipeline;
         let timer = super::Timer::new(gpu, 2);
-        let bytes = 6 * (n as u64) * (n as u64) * 8;
+        let bytes = faces as u64 * (n as u64) * (n as u64) * 8;
         let b = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blur b"),
             size: bytes,
@@ -321,7 +335,7 @@ impl<'g> ShadowMapper<'g> {
             });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(n.div_ceil(8), n.div_ceil(8), 6);
+            pass.dispatch_workgroups(n.div_ceil(8), n.div_ceil(8), faces as u32);
         }
         if let Some(t) = &timer {
             t.resolve(&mut enc);
@@ -341,7 +355,7 @@ impl<'g> ShadowMapper<'g> {
 /// GPU time of the shadow-map passes from timestamp queries, in seconds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PassTimes {
-    /// The six faces' rasterisation.
+    /// The faces' rasterisation.
     pub raster: f64,
     /// The two blur dispatches (0 without a blur).
     pub blur: f64,
