@@ -547,6 +547,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
                 stats.seconds.gpu_direct
             ));
         }
+        if let Some(adapter) = stats.vpls_on.strip_prefix("gpu ") {
+            log(format!(
+                "vpl VPLs drawn from weights computed on the GPU {adapter}: {:.2} s",
+                stats.seconds.vpls
+            ));
+        }
         let nonfinite = stats.nonfinite_samples;
         (
             img,
