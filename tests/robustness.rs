@@ -459,16 +459,7 @@ fn prt_is_finite() {
             }
         }
         let n = transfer.coefficients();
-        let total: Vec<Vec3> = if transfer.bounce.is_empty() {
-            transfer.direct.clone()
-        } else {
-            transfer
-                .direct
-                .iter()
-                .zip(&transfer.bounce)
-                .map(|(a, b)| *a + *b)
-                .collect()
-        };
+        let total = transfer.total();
         let radiance = relight_cpu(&total, n, &lighting);
         if let Some(v) = radiance.iter().position(|c| !c.is_finite()) {
             panic!(

@@ -35,6 +35,17 @@ fn have_xvfb() -> bool {
     ok
 }
 
+/// `interreflect view` under a virtual display, with a private `XDG_RUNTIME_DIR` in `dir`; the
+/// caller adds the arguments after `view`.
+fn view(dir: &Path) -> Command {
+    let mut c = Command::new("xvfb-run");
+    c.args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(exe())
+        .arg("view")
+        .env("XDG_RUNTIME_DIR", dir);
+    c
+}
+
 fn render(dir: &Path, scene: &str, name: &str, args: &[&str]) -> Image {
     common::render_cli(dir, scene, name, args);
     read_exr(&dir.join(format!("{name}.exr"))).unwrap()
@@ -74,12 +85,9 @@ fn a_scripted_session_matches_render_and_follows_the_light() {
         shot("direct-moved"),
     );
     std::fs::write(d.join("session.txt"), script).unwrap();
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(exe())
-        .args(["view", &ring(), "--window", "800x500", "--script"])
+    let o = view(d)
+        .args([ring().as_str(), "--window", "800x500", "--script"])
         .arg(d.join("session.txt"))
-        .env("XDG_RUNTIME_DIR", d)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -218,16 +226,12 @@ fn prt_in_the_viewer_matches_render_and_relights_without_a_new_transfer() {
         shot("prt-indirect"),
     );
     std::fs::write(d.join("session.txt"), script).unwrap();
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(exe())
-        .args(["view"])
+    let o = view(d)
         .arg(&scene)
         .args(["--window", "800x500", "--prt-cache"])
         .arg(&cache)
         .arg("--script")
         .arg(d.join("session.txt"))
-        .env("XDG_RUNTIME_DIR", d)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -320,15 +324,12 @@ fn prt_without_distant_lighting_says_so() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let out = d.join("prt.png");
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(exe())
-        .args(["view", &ring(), "--method", "prt", "--width", "16"])
+    let o = view(d)
+        .args([ring().as_str(), "--method", "prt", "--width", "16"])
         .args(["--frames", "1", "--window", "640x400", "--prt-cache"])
         .arg(d.join("cache"))
         .arg("--screenshot")
         .arg(&out)
-        .env("XDG_RUNTIME_DIR", d)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -350,12 +351,9 @@ fn frames_and_screenshot_save_the_frame_and_exit() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let out = d.join("shots/direct.png");
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(exe())
+    let o = view(d)
         .args([
-            "view",
-            &ring(),
+            ring().as_str(),
             "--method",
             "direct",
             "--width",
@@ -367,7 +365,6 @@ fn frames_and_screenshot_save_the_frame_and_exit() {
             "--screenshot",
         ])
         .arg(&out)
-        .env("XDG_RUNTIME_DIR", d)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

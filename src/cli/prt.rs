@@ -197,15 +197,8 @@ pub fn render(
     // The parts the image shows, summed once: relighting is linear.
     let total: Vec<Vec3> = if args.indirect_only {
         transfer.bounce.clone()
-    } else if transfer.bounce.is_empty() {
-        transfer.direct.clone()
     } else {
-        transfer
-            .direct
-            .iter()
-            .zip(&transfer.bounce)
-            .map(|(a, b)| *a + *b)
-            .collect()
+        transfer.total()
     };
     // Relit RELIGHTS times (the lighting of an interactive session changes every frame); the
     // log keeps the fastest, the steady-state cost of one relighting.

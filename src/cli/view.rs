@@ -624,16 +624,21 @@ impl App {
                 self.last_notices = f.notices.clone();
             }
             // A pending frame (prt's transfer being computed) measures nothing.
-            if !done.frame.pending && !done.frame.job.preview {
-                self.last_full
-                    .insert(done.frame.job.method, done.frame.seconds);
-            }
-            if done.frame.pending {
-            } else if !done.frame.job.preview && done.slot == 0 {
-                self.still_times.push(done.frame.seconds);
-            } else if done.frame.job.preview && done.slot == 0 {
-                self.moving_times.push(done.frame.seconds);
-                self.adapt(done.frame.seconds, done.frame.job.method);
+            if !f.pending {
+                let (seconds, method) = (f.seconds, f.job.method);
+                match (f.job.preview, done.slot) {
+                    (false, slot) => {
+                        self.last_full.insert(method, seconds);
+                        if slot == 0 {
+                            self.still_times.push(seconds);
+                        }
+                    }
+                    (true, 0) => {
+                        self.moving_times.push(seconds);
+                        self.adapt(seconds, method);
+                    }
+                    (true, _) => {}
+                }
             }
             if done.slot + 1 == self.methods().len() || done.frame.job.pass > 0 {
                 self.in_flight = false;

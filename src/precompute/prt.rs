@@ -118,6 +118,19 @@ impl Transfer {
         sh::sh_count(self.order)
     }
 
+    /// The whole transfer, direct plus bounce (relighting is linear, so the two are summed
+    /// once rather than relit apart): `[vertex][coefficient]`.
+    pub fn total(&self) -> Vec<Vec3> {
+        if self.bounce.is_empty() {
+            return self.direct.clone();
+        }
+        self.direct
+            .iter()
+            .zip(&self.bounce)
+            .map(|(a, b)| *a + *b)
+            .collect()
+    }
+
     /// Memory held by the transfer vectors, in bytes.
     pub fn bytes(&self) -> usize {
         (self.direct.len() + self.bounce.len()) * std::mem::size_of::<Vec3>()
@@ -570,6 +583,17 @@ pub fn load_or_compute(
     progress: &Progress,
 ) -> Option<(Transfer, CacheStatus)> {
     let path = cache_dir.map(|d| cache_path(d, scene, opts));
+    load_or_compute_at(scene, accel, opts, path, progress)
+}
+
+/// [`load_or_compute`] with the cache file already named (`cache_path`; `None`: no cache).
+pub fn load_or_compute_at(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &PrtOptions,
+    path: Option<PathBuf>,
+    progress: &Progress,
+) -> Option<(Transfer, CacheStatus)> {
     let bounce = opts.effective_bounces() > 0;
     if let Some(p) = &path
         && let Ok(bytes) = std::fs::read(p)

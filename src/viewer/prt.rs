@@ -6,7 +6,7 @@
 use crate::accel::Accel;
 use crate::image::Image;
 use crate::precompute::prt::{
-    CacheStatus, NO_DISTANT_LIGHTING, PrtOptions, cache_path, load_or_compute, relight_cpu,
+    CacheStatus, NO_DISTANT_LIGHTING, PrtOptions, cache_path, load_or_compute_at, relight_cpu,
     sh_environment, sh_lighting_with, work_units,
 };
 use crate::render::cpu::Progress;
@@ -264,11 +264,10 @@ impl PrtView {
                     done: &add,
                     cancel: &c,
                 };
-                if let Some(dir) = &cache_dir {
-                    r.store(cache_path(dir, &scene, &opts).exists(), Ordering::Relaxed);
-                }
+                let path = cache_dir.map(|d| cache_path(&d, &scene, &opts));
+                r.store(path.as_ref().is_some_and(|p| p.exists()), Ordering::Relaxed);
                 let (transfer, status) =
-                    load_or_compute(&scene, &accel, &opts, cache_dir.as_deref(), &progress)?;
+                    load_or_compute_at(&scene, &accel, &opts, path, &progress)?;
                 let secs = t.elapsed().as_secs_f64();
                 let origin = match status {
                     CacheStatus::Hit(p) => format!("prt: transfer read from {}", p.display()),
@@ -284,16 +283,7 @@ impl PrtView {
                     }
                 };
                 let coefficients = transfer.coefficients();
-                let total = if transfer.bounce.is_empty() {
-                    transfer.direct
-                } else {
-                    transfer
-                        .direct
-                        .iter()
-                        .zip(&transfer.bounce)
-                        .map(|(a, b)| *a + *b)
-                        .collect()
-                };
+                let total = transfer.total();
                 Some(Ready {
                     total,
                     bounce: transfer.bounce,
