@@ -296,6 +296,22 @@ struct GpuVplSource {
     _pad3: u32,
 }
 
+// The imperfect-shadow-map pass's uniform (`render::gpu::ism`).
+struct GpuIsmParams {
+    res: u32,
+    points_per_map: u32,
+    maps: u32,
+    pyramid_len: u32,
+    blur: u32,
+    front_layer: f32,
+    level_n: u32,
+    level_offset: u32,
+    other_n: u32,
+    other_offset: u32,
+    has_other: u32,
+    _pad0: u32,
+}
+
 // The VPL-weight pass's uniform (`render::gpu::vpl_gen`).
 struct GpuVplGenParams {
     count: u32,

@@ -615,6 +615,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
             b8 * 1e3
         );
     }
+    ism_section(&mut md)?;
     md.push('\n');
     let _ = writeln!(
         md,
@@ -623,6 +624,105 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
         t_all.elapsed().as_secs_f64()
     );
     write_page(&args.out.join("bench.md"), &md, t_all)
+}
+
+/// The VPLs' imperfect shadow maps splatted on the GPU (`render::gpu::ism`) against their CPU
+/// twin, with the point sampling both share timed on its own.
+fn ism_section(md: &mut String) -> anyhow::Result<()> {
+    use interreflect::visibility::ism::{ImperfectShadowMaps, IsmSampler};
+    use rayon::prelude::*;
+    let _ = writeln!(
+        md,
+        "\nImperfect shadow maps of each scene's 200 VPLs at the scene's settings (32² texels, \
+         4096 points per map, blurred): `render::gpu::ism::build` (`shaders/ism.wgsl`: \
+         projection, nearest layers, pull-push, blur; read back) against its twin \
+         `ImperfectShadowMaps::build` (all threads), in this process, best of three after one \
+         warm-up. Both sample the points on the CPU with the same `IsmSampler`, timed alone in \
+         the third column and included in both sides.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| scene | maps × points | point sampling (CPU, both sides) | CPU maps | GPU maps (wall) | CPU ÷ GPU |\n|---|---|---|---|---|---|"
+    );
+    let gpu = match interreflect::render::gpu::Gpu::new() {
+        Ok(g) => g,
+        Err(e) => {
+            let _ = writeln!(md, "| — | | no GPU adapter: {e} | | | |");
+            return Ok(());
+        }
+    };
+    for scene in [
+        "scenes/ring.toml",
+        "scenes/bunny.toml",
+        "scenes/dragon.toml",
+    ] {
+        eprint!("bench: imperfect shadow maps of {scene} ... ");
+        let sc = interreflect::scene::Scene::load(Path::new(scene))?;
+        let accel = interreflect::accel::Accel::build(&sc.mesh.positions, &sc.mesh.indices);
+        let light = sc.lights[0];
+        let map = interreflect::visibility::vsm::VarianceShadowMap::build(
+            &accel,
+            sc.mesh.bounds(),
+            &light,
+            &sc.settings.vsm,
+        );
+        let eps = interreflect::render::cpu::surface::ray_epsilon(&sc);
+        let visible = |p: glam::Vec3| {
+            light
+                .incident(p)
+                .map_or(0.0, |inc| map.lit(p + inc.wi * eps))
+        };
+        let vpls = interreflect::precompute::vpl::generate(
+            &interreflect::precompute::vpl::sources(&sc),
+            &light,
+            200,
+            1,
+            &visible,
+        );
+        let (pos, idx, opts) = (&sc.mesh.positions, &sc.mesh.indices, &sc.settings.ism);
+        let best = |f: &mut dyn FnMut()| {
+            f();
+            (0..3)
+                .map(|_| {
+                    let t = Instant::now();
+                    f();
+                    t.elapsed().as_secs_f64()
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let ts = best(&mut || {
+            let sampler = IsmSampler::new(pos, idx, &vpls, opts, 1);
+            (0..vpls.len()).into_par_iter().for_each_init(
+                || vec![None; sampler.points_per_map],
+                |out, i| sampler.map_points(i, out),
+            );
+        });
+        let tc = best(&mut || {
+            ImperfectShadowMaps::build(pos, idx, &vpls, opts, 1);
+        });
+        let mut err = None;
+        let tg = best(&mut || {
+            if let Err(e) = interreflect::render::gpu::ism::build(&gpu, pos, idx, &vpls, opts, 1) {
+                err = Some(e.to_string());
+            }
+        });
+        if let Some(e) = err {
+            bail!("imperfect shadow maps on the GPU: {e}");
+        }
+        eprintln!("CPU ÷ GPU {:.2}", tc / tg);
+        let _ = writeln!(
+            md,
+            "| {} | {} × {} | {:.1} ms | {:.1} ms | {:.1} ms | {:.2}× |",
+            sc.name,
+            vpls.len(),
+            opts.points_per_map,
+            ts * 1e3,
+            tc * 1e3,
+            tg * 1e3,
+            tc / tg
+        );
+    }
+    Ok(())
 }
 
 /// Writes a finished page atomically and says so.
@@ -704,7 +804,7 @@ fn gpu_bench(args: &BenchArgs) -> anyhow::Result<i32> {
         md,
         "Stages on the GPU with `--device gpu`: the shadow maps (both columns), sg's shading \
          over the vertex cuts (`sg_shade`, `sg_shade_sum`), the VPL baseline's sum (`vpl`), \
-         the direct light (`direct`), the VPLs' sampling weights (`vpl_gen`, vpl only) and the PNG's tonemap. The GPU stages' time is wall time \
+         the direct light (`direct`), the VPLs' sampling weights and imperfect shadow maps (`vpl_gen`, `ism`, vpl only) and the PNG's tonemap. The GPU stages' time is wall time \
          around the passes (gathering, uploads, dispatches, read-back); the pixel loop that \
          follows only adds up their results. \
          Per-pass GPU timestamps are not given: lavapipe's timestamps do not bracket compute \

@@ -523,6 +523,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         gpu_shading_fallback(&args, &stats.indirect_on)?;
         gpu_direct_fallback(&args, &stats.direct_on)?;
         gpu_vpls_fallback(&args, &stats.vpls_on)?;
+        gpu_ism_fallback(&args, &stats.ism_on)?;
         log(format!(
             "vpl: {} VPLs, clamp distance {:.4} ({} of {} pairs clamped), {} visibility rays",
             stats.vpls,
@@ -551,6 +552,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             log(format!(
                 "vpl VPLs drawn from weights computed on the GPU {adapter}: {:.2} s",
                 stats.seconds.vpls
+            ));
+        }
+        if let Some(adapter) = stats.ism_on.strip_prefix("gpu ") {
+            log(format!(
+                "vpl imperfect shadow maps splatted on the GPU {adapter}: {:.2} s",
+                stats.seconds.ism
             ));
         }
         let nonfinite = stats.nonfinite_samples;
@@ -600,6 +607,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         gpu_shading_fallback(&args, &stats.shading_on)?;
         gpu_direct_fallback(&args, &stats.direct_on)?;
         gpu_vpls_fallback(&args, &stats.vpls_on)?;
+        gpu_ism_fallback(&args, &stats.ism_on)?;
         let s = &stats;
         log(format!(
             "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
@@ -916,6 +924,16 @@ fn gpu_vpls_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
         on,
         "the VPLs' weights could not be computed on the GPU",
         "VPLs' weights computed on the CPU",
+    )
+}
+
+/// With `--device gpu`, imperfect shadow maps the GPU could not splat are an error.
+fn gpu_ism_fallback(args: &RenderArgs, on: &str) -> anyhow::Result<()> {
+    gpu_fallback(
+        args,
+        on,
+        "the imperfect shadow maps could not be splatted on the GPU",
+        "imperfect shadow maps splatted on the CPU",
     )
 }
 

@@ -80,6 +80,64 @@ pub(crate) struct MapParts<'a> {
     pub bias: f32,
 }
 
+/// Where the points splatted into imperfect shadow maps come from: `points_per_map` per VPL,
+/// sampled uniformly by area over the scene's triangles from a stream keyed by the VPL's index
+/// (`None` where the scene has no area to sample), and each map's origin and frame. The CPU
+/// splats them in [`ImperfectShadowMaps::build`], the GPU in `render::gpu::ism`.
+pub struct IsmSampler<'a> {
+    positions: &'a [Vec3],
+    indices: &'a [[u32; 3]],
+    dist: Distribution1D,
+    seed: u64,
+    /// Texels per side of each map.
+    pub res: usize,
+    pub points_per_map: usize,
+    /// Per VPL: position and the frame of its normal.
+    pub origins: Vec<(Vec3, Frame)>,
+}
+
+impl<'a> IsmSampler<'a> {
+    pub fn new(
+        positions: &'a [Vec3],
+        indices: &'a [[u32; 3]],
+        vpls: &[Vpl],
+        opts: &IsmOptions,
+        seed: u64,
+    ) -> IsmSampler<'a> {
+        let areas: Vec<f32> = indices
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| positions[i as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .collect();
+        IsmSampler {
+            positions,
+            indices,
+            dist: Distribution1D::new(&areas),
+            seed,
+            res: opts.resolution.max(2) as usize,
+            points_per_map: opts.points_per_map as usize,
+            origins: vpls
+                .iter()
+                .map(|v| (v.position, Frame::from_normal(v.normal)))
+                .collect(),
+        }
+    }
+
+    /// The points of map `i`, written to `out` (`points_per_map` of them).
+    pub fn map_points(&self, i: usize, out: &mut [Option<Vec3>]) {
+        let mut rng = Rng::keyed(self.seed, 0x0049_534d, i as u64);
+        for slot in out {
+            *slot = self.dist.sample(rng.f32()).map(|t| {
+                let b = uniform_triangle(rng.vec2());
+                let [a, bb, c] = self.indices[t].map(|i| self.positions[i as usize]);
+                a * b[0] + bb * b[1] + c * b[2]
+            });
+        }
+    }
+}
+
 impl ImperfectShadowMaps {
     /// Splats the scene (triangles `positions`/`indices`) into one map per VPL.
     pub fn build(
@@ -89,31 +147,18 @@ impl ImperfectShadowMaps {
         opts: &IsmOptions,
         seed: u64,
     ) -> ImperfectShadowMaps {
-        let res = opts.resolution.max(2) as usize;
-        let tri = |t: usize| indices[t].map(|i| positions[i as usize]);
-        let areas: Vec<f32> = (0..indices.len())
-            .map(|t| {
-                let [a, b, c] = tri(t);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .collect();
-        let dist = Distribution1D::new(&areas);
-        let origins: Vec<(Vec3, Frame)> = vpls
-            .iter()
-            .map(|v| (v.position, Frame::from_normal(v.normal)))
-            .collect();
-        let maps: Vec<(Vec<Vec2>, f32)> = origins
+        let sampler = IsmSampler::new(positions, indices, vpls, opts, seed);
+        let res = sampler.res;
+        let maps: Vec<(Vec<Vec2>, f32)> = sampler
+            .origins
             .par_iter()
             .enumerate()
             .map(|(i, &(y, frame))| {
-                let mut rng = Rng::keyed(seed, 0x0049_534d, i as u64);
-                let splats: Vec<(usize, f32)> = (0..opts.points_per_map)
-                    .filter_map(|_| {
-                        let t = dist.sample(rng.f32())?;
-                        let b = uniform_triangle(rng.vec2());
-                        let [a, bb, c] = tri(t);
-                        texel(res, y, &frame, a * b[0] + bb * b[1] + c * b[2])
-                    })
+                let mut points = vec![None; sampler.points_per_map];
+                sampler.map_points(i, &mut points);
+                let splats: Vec<(usize, f32)> = points
+                    .iter()
+                    .filter_map(|p| texel(res, y, &frame, (*p)?))
                     .collect();
                 // The nearest layer of each texel: its nearest point and those within
                 // FRONT_LAYER of it (points behind an occluder land in its texels too).
@@ -137,17 +182,29 @@ impl ImperfectShadowMaps {
                 if opts.blur {
                     blur3(&mut m, res);
                 }
-                (m, min_variance(far.max(1e-3)))
+                (m, far)
             })
             .collect();
-        let min_variance = maps.iter().map(|m| m.1).collect();
+        let far = maps.iter().map(|m| m.1).collect::<Vec<_>>();
         let atlas = maps.into_iter().flat_map(|m| m.0).collect();
+        ImperfectShadowMaps::from_splats(sampler, atlas, &far, opts.bias)
+    }
+
+    /// The maps `sampler`'s points were splatted into, from their atlas (map after map,
+    /// `res`² texels each) and each map's farthest splatted depth (the scale of its variance
+    /// floor): how the GPU's splatting (`render::gpu::ism`) hands its result back.
+    pub fn from_splats(
+        sampler: IsmSampler,
+        atlas: Vec<Vec2>,
+        far: &[f32],
+        bias: f32,
+    ) -> ImperfectShadowMaps {
         ImperfectShadowMaps {
-            res,
-            origins,
+            res: sampler.res,
+            origins: sampler.origins,
             atlas,
-            bias: opts.bias,
-            min_variance,
+            bias,
+            min_variance: far.iter().map(|f| min_variance(f.max(1e-3))).collect(),
         }
     }
 
@@ -215,6 +272,21 @@ impl ImperfectShadowMaps {
         }
     }
 
+    /// Texels per side of each map.
+    pub fn resolution(&self) -> usize {
+        self.res
+    }
+
+    /// Map `i`'s moments (E[z], E[z²]), rows of [`Self::resolution`] texels.
+    pub fn moments(&self, i: usize) -> &[Vec2] {
+        &self.atlas[i * self.res * self.res..(i + 1) * self.res * self.res]
+    }
+
+    /// Map `i`'s variance floor.
+    pub fn min_variance(&self, i: usize) -> f32 {
+        self.min_variance[i]
+    }
+
     /// Number of maps.
     pub fn len(&self) -> usize {
         self.origins.len()
@@ -257,7 +329,7 @@ const RIM: f32 = 0.983;
 /// Depth range of the layer a texel keeps, relative to its nearest point: a floor seen at a
 /// grazing angle from just above spans ±25 % of its distance within one 32² texel, an occluder
 /// in front of a wall a factor of several.
-const FRONT_LAYER: f32 = 0.5;
+pub const FRONT_LAYER: f32 = 0.5;
 
 /// Paraboloid coordinates (u, v) in the unit disc and distance of point `p` seen from a VPL at
 /// `y` with normal frame `frame`; `None` below its horizon or at the VPL itself.

@@ -113,6 +113,10 @@ pub struct SgStats {
     /// failed)"; empty without VPLs.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub vpls_on: String,
+    /// Where the VPLs' imperfect shadow maps were splatted (`node_maps = 0`): "cpu", "gpu
+    /// (adapter)" (`--device gpu`), or "cpu (why the GPU failed)"; empty without VPLs.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub ism_on: String,
     /// Per light, what the GPU shading uploaded (empty on the CPU).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub gpu_uploads: Vec<crate::render::gpu::sg_shade::ShadeUpload>,
@@ -477,18 +481,21 @@ pub fn render_sg_prepared(
                     opts.device,
                 );
                 stats.vpls_on = place;
-                vpls.iter()
+                let mut ism_on = String::new();
+                let vis = vpls
+                    .iter()
                     .enumerate()
                     .map(|(k, vpls)| {
+                        let (ism, place) =
+                            imperfect_shadow_maps(scene, vpls, opts.seed ^ k as u64, opts.device);
+                        merge_place(&mut ism_on, place);
                         Some(ApproxVisibility::nearest_vpls(
-                            scene,
-                            tree,
-                            pieces,
-                            vpls,
-                            opts.seed ^ k as u64,
+                            scene, tree, pieces, vpls, ism,
                         ))
                     })
-                    .collect()
+                    .collect();
+                stats.ism_on = ism_on;
+                vis
             };
         stats.seconds.vpls = t.elapsed().as_secs_f64();
         (maps, lits, vpl_vis)
@@ -879,6 +886,42 @@ pub(super) fn scene_vpls(
     (vpls, place)
 }
 
+/// The imperfect shadow maps of `vpls` (the scene's `[visibility]` settings): splatted on the
+/// GPU with `--device gpu` (`render::gpu::ism`), otherwise — and when the GPU fails — on the
+/// CPU. Returns them and where they were made: "cpu", "gpu (adapter)" or "cpu (the GPU
+/// failed: why)".
+pub(super) fn imperfect_shadow_maps(
+    scene: &Scene,
+    vpls: &[Vpl],
+    seed: u64,
+    device: Device,
+) -> (ImperfectShadowMaps, String) {
+    let (positions, indices) = (&scene.mesh.positions, &scene.mesh.indices);
+    let opts = &scene.settings.ism;
+    let mut place = "cpu".to_string();
+    if device == Device::Gpu {
+        let run = || -> Result<(ImperfectShadowMaps, String), crate::render::gpu::GpuError> {
+            let gpu = crate::render::gpu::Gpu::shared()?;
+            let maps = crate::render::gpu::ism::build(&gpu, positions, indices, vpls, opts, seed)?;
+            Ok((maps, gpu.adapter.clone()))
+        };
+        match run() {
+            Ok((maps, adapter)) => return (maps, format!("gpu ({adapter})")),
+            Err(e) => place = format!("cpu (the GPU failed: {e})"),
+        }
+    }
+    let maps = ImperfectShadowMaps::build(positions, indices, vpls, opts, seed);
+    (maps, place)
+}
+
+/// Folds one light's stage place into `all`: the first failure ("cpu (why)") sticks, otherwise
+/// the last place.
+pub(super) fn merge_place(all: &mut String, place: String) {
+    if !all.starts_with("cpu (") {
+        *all = place;
+    }
+}
+
 /// The light's visibility at surface point `p`: a shadow ray (0 or 1), or the shadow map.
 pub(super) fn light_fraction(
     accel: &Accel,
@@ -948,15 +991,8 @@ impl ApproxVisibility {
         tree: &ReflectorTree,
         pieces: &[ReflectorPiece],
         vpls: &[Vpl],
-        seed: u64,
+        ism: ImperfectShadowMaps,
     ) -> ApproxVisibility {
-        let ism = ImperfectShadowMaps::build(
-            &scene.mesh.positions,
-            &scene.mesh.indices,
-            vpls,
-            &scene.settings.ism,
-            seed,
-        );
         let object_of = |t: u32| scene.mesh.tri_object[t as usize];
         let vpl_objects: Vec<u32> = vpls.iter().map(|v| object_of(v.tri)).collect();
         let weights = tree

@@ -23,7 +23,10 @@
 //! (docs/gpu.md).
 
 use super::reference::Progress;
-use super::sg::{direct_light, direct_on_gpu, primary_hit, primary_hits, scene_vpls, shadow_maps};
+use super::sg::{
+    direct_light, direct_on_gpu, imperfect_shadow_maps, merge_place, primary_hit, primary_hits,
+    scene_vpls, shadow_maps,
+};
 use super::surface::{SurfacePoint, gpu_points, ray_epsilon, scatter};
 use crate::accel::{Accel, Hit};
 use crate::brdf::Brdf;
@@ -104,6 +107,10 @@ pub struct VplStats {
     /// with shadow maps), or "cpu (why the GPU failed)"; empty without indirect light.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub vpls_on: String,
+    /// Where the VPLs' imperfect shadow maps were splatted (`--visibility approx`): "cpu", "gpu
+    /// (adapter)" (`--device gpu`), or "cpu (why the GPU failed)"; empty otherwise.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub ism_on: String,
     /// VPLs of all lights.
     pub vpls: usize,
     pub clamp_distance: f32,
@@ -193,13 +200,10 @@ pub fn render_vpl(
         let t = Instant::now();
         for (k, vs) in vpls.into_iter().enumerate() {
             let ism = (opts.visibility == Visibility::Approx).then(|| {
-                ImperfectShadowMaps::build(
-                    &scene.mesh.positions,
-                    &scene.mesh.indices,
-                    &vs,
-                    &scene.settings.ism,
-                    opts.seed ^ k as u64,
-                )
+                let (maps, place) =
+                    imperfect_shadow_maps(scene, &vs, opts.seed ^ k as u64, opts.device);
+                merge_place(&mut stats.ism_on, place);
+                maps
             });
             let emitters = vs
                 .iter()

@@ -501,6 +501,33 @@ pub struct GpuVplGenParams {
     pub _pad1: u32,
 }
 
+/// The imperfect-shadow-map pass's uniform (`super::ism`), one per dispatch: every map at
+/// once (workgroup row y = map), one phase (entry point) each.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuIsmParams {
+    /// Texels per side of each map.
+    pub res: u32,
+    pub points_per_map: u32,
+    /// Maps in this dispatch.
+    pub maps: u32,
+    /// Entries of one map's pull-push pyramid (its levels' texels, finest first).
+    pub pyramid_len: u32,
+    /// 1 for the 3 × 3 blur after pull-push.
+    pub blur: u32,
+    /// `visibility::ism::FRONT_LAYER`.
+    pub front_layer: f32,
+    /// Pull and push: the level's texels per side and its first entry in the pyramid.
+    pub level_n: u32,
+    pub level_offset: u32,
+    /// Pull: the finer level it sums; push: the coarser level holes take from.
+    pub other_n: u32,
+    pub other_offset: u32,
+    /// Push: 1 when there is a coarser level.
+    pub has_other: u32,
+    pub _pad0: u32,
+}
+
 /// The direct-light pass's uniform (`super::direct`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -764,6 +791,20 @@ pub fn layouts() -> Vec<StructLayout> {
             _pad2,
             albedo,
             _pad3
+        }),
+        layout!(GpuIsmParams {
+            res,
+            points_per_map,
+            maps,
+            pyramid_len,
+            blur,
+            front_layer,
+            level_n,
+            level_offset,
+            other_n,
+            other_offset,
+            has_other,
+            _pad0
         }),
         layout!(GpuVplGenParams {
             count,

@@ -10,6 +10,7 @@
 
 pub mod direct;
 pub mod gbuffer;
+pub mod ism;
 pub mod layout;
 pub mod prt;
 pub mod sg_shade;
@@ -234,22 +235,38 @@ impl Gpu {
 
     /// The compute pipeline of `pass`, whose entry point has the pass's name.
     fn compute_pipeline(&self, pass: &str) -> wgpu::ComputePipeline {
+        self.compute_entry(pass, pass, None)
+    }
+
+    /// The compute pipeline of entry point `entry` of `pass`, with `layout` (or the layout
+    /// derived from what the entry point uses). Built once per device and (pass, entry).
+    fn compute_entry(
+        &self,
+        pass: &str,
+        entry: &str,
+        layout: Option<&wgpu::PipelineLayout>,
+    ) -> wgpu::ComputePipeline {
+        let key = if entry == pass {
+            pass.to_string()
+        } else {
+            format!("{pass}:{entry}")
+        };
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = cache.get(pass) {
+        if let Some(p) = cache.get(&key) {
             return p.clone();
         }
         let module = self.shader(pass);
         let p = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(pass),
-                layout: None,
+                label: Some(&key),
+                layout,
                 module: &module,
-                entry_point: Some(pass),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
                 cache: None,
             });
-        cache.insert(pass.to_string(), p.clone());
+        cache.insert(key, p.clone());
         p
     }
 
@@ -408,6 +425,17 @@ impl Gpu {
 
     /// Copies `bytes` bytes of a GPU buffer back to the CPU.
     fn read_back(&self, src: &wgpu::Buffer, bytes: u64, what: &str) -> Result<Vec<u8>, GpuError> {
+        self.read_back_range(src, 0, bytes, what)
+    }
+
+    /// Copies `bytes` bytes of a GPU buffer, from byte `offset` on, back to the CPU.
+    fn read_back_range(
+        &self,
+        src: &wgpu::Buffer,
+        offset: u64,
+        bytes: u64,
+        what: &str,
+    ) -> Result<Vec<u8>, GpuError> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("read back"),
             size: bytes,
@@ -417,7 +445,7 @@ impl Gpu {
         let mut enc = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes);
+        enc.copy_buffer_to_buffer(src, offset, &staging, 0, bytes);
         self.queue.submit([enc.finish()]);
         let slice = staging.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();

@@ -43,7 +43,7 @@ pub fn parts(pass: &str) -> &'static [&'static str] {
 }
 
 /// Every pass: (name = file stem = entry point, its own source).
-pub const PASSES: [(&str, &str); 11] = [
+pub const PASSES: [(&str, &str); 12] = [
     (
         "prt_relight",
         include_str!("../../../shaders/prt_relight.wgsl"),
@@ -64,6 +64,7 @@ pub const PASSES: [(&str, &str); 11] = [
     ("vpl", include_str!("../../../shaders/vpl.wgsl")),
     ("direct", include_str!("../../../shaders/direct.wgsl")),
     ("vpl_gen", include_str!("../../../shaders/vpl_gen.wgsl")),
+    ("ism", include_str!("../../../shaders/ism.wgsl")),
 ];
 
 /// The assembled source of `pass` (shared files, then the pass), or `None` for an unknown pass.
