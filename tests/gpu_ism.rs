@@ -190,3 +190,46 @@ fn render_splats_the_maps_on_the_gpu_when_asked_and_says_so() {
         assert_eq!(log[method]["ism_on"], "cpu", "{method}: {}", log[method]);
     }
 }
+
+/// Maps the GPU cannot splat in one dispatch row (5 million points per map: more than 65,535
+/// workgroups of 64) are an error under `--device gpu` naming the scene file and the setting,
+/// before rendering, for vpl and for sg with the VPLs' maps, and nothing is written;
+/// `--device auto` splats them on the CPU (not run here: it would draw a billion points).
+#[test]
+fn too_many_points_for_the_gpu_fail_clearly() {
+    let Some(_gpu) = common::gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let ring =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml")).unwrap();
+    let scene = dir.path().join("ring.toml");
+    std::fs::write(
+        &scene,
+        format!("{ring}\n[visibility]\nism_points = 5000000\n"),
+    )
+    .unwrap();
+    let out = dir.path().join("ring.exr");
+    for args in [
+        &["--method", "vpl"][..],
+        &["--method", "sg", "--node-maps", "0"][..],
+    ] {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_interreflect"))
+            .arg("render")
+            .arg(&scene)
+            .args(args)
+            .args(["--device", "gpu", "--width", "16", "--spp", "1"])
+            .args(["--quiet", "--output"])
+            .arg(&out)
+            .env("XDG_RUNTIME_DIR", dir.path())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_ne!(run.status.code(), Some(0), "{stderr}");
+        assert!(
+            stderr.contains("ring.toml")
+                && stderr.contains("imperfect shadow maps")
+                && stderr.contains("ism_points"),
+            "{args:?}: {stderr}"
+        );
+        assert!(!out.exists() && !dir.path().join("ring.png").exists());
+    }
+}

@@ -495,6 +495,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         (img, None, None, Some(prt_log), None, 0)
     } else if args.method == Method::Vpl {
         shadow_map_device_check(&args)?;
+        ism_device_check(&args, &scene)?;
         if args.device == Device::Gpu && args.visibility != Visibility::Approx {
             eprintln!(
                 "notice: vpl sums its VPLs on the GPU only with --visibility approx (the other visibilities cast shadow rays); summing on the CPU"
@@ -575,6 +576,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         )
     } else if is_sg {
         shadow_map_device_check(&args)?;
+        if scene.settings.ism.node_maps == 0 {
+            ism_device_check(&args, &scene)?;
+        }
         if args.device == Device::Gpu
             && args.method == Method::Sg
             && (cut_mode != CutMode::Vertex || args.visibility != Visibility::Approx)
@@ -882,6 +886,19 @@ fn shadow_map_device_check(args: &RenderArgs) -> anyhow::Result<()> {
     if args.device == Device::Gpu && args.visibility != Visibility::Exact {
         interreflect::render::gpu::Gpu::shared()
             .map_err(|e| anyhow::anyhow!("--device gpu: the shadow maps need the GPU: {e}"))?;
+    }
+    Ok(())
+}
+
+/// With `--device gpu --visibility approx`, imperfect shadow maps the GPU cannot splat (too many
+/// points per map, buffers over the binding limit): fail before rendering.
+fn ism_device_check(args: &RenderArgs, scene: &interreflect::scene::Scene) -> anyhow::Result<()> {
+    if args.device == Device::Gpu && args.visibility == Visibility::Approx {
+        let gpu = interreflect::render::gpu::Gpu::shared().map_err(|e| {
+            anyhow::anyhow!("--device gpu: the imperfect shadow maps need the GPU: {e}")
+        })?;
+        interreflect::render::gpu::ism::maps_per_dispatch(&gpu, &scene.settings.ism)
+            .map_err(|e| anyhow::anyhow!("--device gpu: {}: {e}", args.scene.display()))?;
     }
     Ok(())
 }

@@ -96,18 +96,12 @@ fn levels(res: usize) -> Vec<(usize, usize)> {
     out
 }
 
-/// The imperfect shadow maps of `vpls`, splatted on the GPU: the same maps as
-/// [`ImperfectShadowMaps::build`] with the same arguments, to rounding.
-pub fn build(
-    gpu: &Gpu,
-    positions: &[Vec3],
-    indices: &[[u32; 3]],
-    vpls: &[Vpl],
-    opts: &IsmOptions,
-    seed: u64,
-) -> Result<ImperfectShadowMaps, GpuError> {
-    let sampler = IsmSampler::new(positions, indices, vpls, opts, seed);
-    let (res, per) = (sampler.res, sampler.points_per_map);
+/// Maps of `opts`' size the pass can splat per dispatch, or why it cannot splat them at all
+/// (more points per map than one dispatch row, or one map's buffers over the binding limit):
+/// checked before any point is drawn, and by `render --device gpu` before rendering.
+pub fn maps_per_dispatch(gpu: &Gpu, opts: &IsmOptions) -> Result<usize, GpuError> {
+    let res = opts.resolution.max(2) as usize;
+    let per = opts.points_per_map as usize;
     let texels = res * res;
     if per.div_ceil(GROUP as usize) > 65_535 {
         return Err(failed(format!(
@@ -115,9 +109,8 @@ pub fn build(
             65_535 * GROUP
         )));
     }
-    let levels = levels(res);
-    let pyramid_len: usize = levels.iter().map(|(n, _)| n * n).sum();
-    // Maps per dispatch: within the binding limit for every buffer, and the dispatch limit.
+    let pyramid_len: usize = levels(res).iter().map(|(n, _)| n * n).sum();
+    // Within the binding limit for every buffer, and the dispatch limit.
     let per_map_bytes = [
         per * 16,
         texels * TEXEL_WORDS * 4 + 4,
@@ -132,6 +125,25 @@ pub fn build(
             gpu.max_binding
         )));
     }
+    Ok(chunk)
+}
+
+/// The imperfect shadow maps of `vpls`, splatted on the GPU: the same maps as
+/// [`ImperfectShadowMaps::build`] with the same arguments, to rounding.
+pub fn build(
+    gpu: &Gpu,
+    positions: &[Vec3],
+    indices: &[[u32; 3]],
+    vpls: &[Vpl],
+    opts: &IsmOptions,
+    seed: u64,
+) -> Result<ImperfectShadowMaps, GpuError> {
+    let sampler = IsmSampler::new(positions, indices, vpls, opts, seed);
+    let (res, per) = (sampler.res, sampler.points_per_map);
+    let texels = res * res;
+    let levels = levels(res);
+    let pyramid_len: usize = levels.iter().map(|(n, _)| n * n).sum();
+    let chunk = maps_per_dispatch(gpu, opts)?;
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let pipelines = pipelines(gpu);
