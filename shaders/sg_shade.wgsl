@@ -5,10 +5,14 @@
 // at a tree node; `sg_shade_sum` then adds up each sample's pairs. One invocation per pair
 // rather than per sample because lavapipe ends every loop of an invocation once all its loops
 // together have run 65,535 iterations (llvmpipe's LP_MAX_TGSI_LOOP_ITERATIONS; docs/gpu.md),
-// and one leaf takes about a thousand. Rust twin: the shading stage of `render::cpu::sg` with
-// `--visibility approx` and `--cut vertex` (`LitScene::evaluate`, `LitTriangle::shade`,
-// `LitScene::cluster`, `NodeMaps::visibility`); the transport functions are in
-// shaders/shared/transport.wgsl. Prepended with shaders/shared/*.wgsl.
+// and one leaf takes about a thousand. Two entry points, dispatched one after the other over
+// the same points: `sg_shade` for the (sample, leaf) pairs, `sg_shade_clusters` for the
+// (sample, inner node) pairs — each sample's cut lists its leaves first — because lavapipe runs
+// all the code an entry point can reach, taken or not, so an inner node in a shader that also
+// holds the leaf transport pays for the transport. Rust twin: the shading stage of
+// `render::cpu::sg` with `--visibility approx` and `--cut vertex` (`LitScene::evaluate`,
+// `LitTriangle::shade`, `LitScene::cluster`, `NodeMaps::visibility`); the transport functions
+// are in shaders/shared/transport.wgsl. Prepended with shaders/shared/*.wgsl.
 
 @group(0) @binding(0) var<uniform> params: GpuShadeParams;
 @group(0) @binding(1) var<storage, read> points: array<GpuShadePoint>;
@@ -51,35 +55,60 @@ fn node_maps_visibility(m: u32, p: vec3<f32>) -> f32 {
     return chebyshev_upper_bound(mo, z * (1.0 - params.map_bias), o.min_variance);
 }
 
-@compute @workgroup_size(64)
-fn sg_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if (gid.x >= params.count) {
-        return;
-    }
-    let pair = params.first + gid.x;
-    // The point whose pairs hold this one: the last with pair_start ≤ pair (a point without
-    // pairs shares its pair_start with the next).
+// The point among params.point_first..point_end holding pair `pair` of a kind whose pairs
+// start, per point, at `leaf_pair_start` (leaves) or `pair_start − leaf_pair_start` (inner
+// nodes): the last point starting at or before it (a point without such pairs shares its
+// start with the next).
+fn point_of(pair: u32, leaves: bool) -> u32 {
     var lo = params.point_first;
     var hi = params.point_end;
     while (hi - lo > 1u) {
         let mid = (lo + hi) / 2u;
-        if (points[mid].pair_start <= pair) {
+        var start = points[mid].leaf_pair_start;
+        if (!leaves) {
+            start = points[mid].pair_start - start;
+        }
+        if (start <= pair) {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    let pt = points[lo];
-    let node = nodes[cut_nodes[pt.cut_start + (pair - pt.pair_start)]];
+    return lo;
+}
+
+@compute @workgroup_size(64)
+fn sg_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= params.count) {
+        return;
+    }
+    let pair = params.leaf_first + gid.x;
+    let pt = points[point_of(pair, true)];
+    let k = pair - pt.leaf_pair_start;
+    let node = nodes[cut_nodes[pt.cut_start + k]];
+    var value = lit_triangle_shade(leaves[node.leaf], pt.x, pt.receiver, pt.across);
+    if (any(value != vec3<f32>(0.0))) {
+        value *= node_maps_visibility(node.map, pt.xo);
+    }
+    pair_values[pt.pair_start + k - params.first] = vec4<f32>(value, 0.0);
+}
+
+@compute @workgroup_size(64)
+fn sg_shade_clusters(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= params.cluster_count) {
+        return;
+    }
+    let pair = params.cluster_first + gid.x;
+    let pt = points[point_of(pair, false)];
+    let k = pt.leaf_count + pair - (pt.pair_start - pt.leaf_pair_start);
+    let node = nodes[cut_nodes[pt.cut_start + k]];
     var value = vec3<f32>(0.0);
-    if (node.leaf != NONE) {
-        value = lit_triangle_shade(leaves[node.leaf], pt.x, pt.receiver, pt.across);
-    } else if (node.weight > 0.0) {
+    if (node.weight > 0.0) {
         let bound = node_bound(node.bound, pt.x, pt.receiver);
         value = min(lit_scene_cluster(node, params.light_pos, pt.x, pt.receiver, pt.across), bound);
     }
     if (any(value != vec3<f32>(0.0))) {
         value *= node_maps_visibility(node.map, pt.xo);
     }
-    pair_values[gid.x] = vec4<f32>(value, 0.0);
+    pair_values[pt.pair_start + k - params.first] = vec4<f32>(value, 0.0);
 }

@@ -1,6 +1,7 @@
 // Per-pixel SG shading over the cut (`render::gpu::sg_shade`), second of two passes: each pixel
-// sample's indirect radiance is the sum of its (sample, cut node) pairs' values from `sg_shade`,
-// in cut order, added to what earlier lights left. Prepended with shaders/shared/*.wgsl.
+// sample's indirect radiance is the sum of its (sample, cut node) pairs' values from `sg_shade`
+// and `sg_shade_clusters` (its cut's leaves, then its inner nodes), added to what earlier
+// lights left. Prepended with shaders/shared/*.wgsl.
 
 @group(0) @binding(0) var<uniform> params: GpuShadeParams;
 @group(0) @binding(1) var<storage, read> points: array<GpuShadePoint>;

@@ -106,9 +106,9 @@ struct GpuShadeParams {
     point_end: u32,
     map_res: u32,
     map_bias: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    leaf_first: u32,
+    cluster_count: u32,
+    cluster_first: u32,
 }
 
 // One pixel sample on a receiver: its point x, the point offset along the geometric normal that
@@ -123,6 +123,10 @@ struct GpuShadePoint {
     across: vec3<f32>,
     pair_start: u32,
     receiver: GpuReceiver,
+    leaf_count: u32,
+    leaf_pair_start: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // Per-slot sums of the lobes under a node (`cut::NodeLobe`).

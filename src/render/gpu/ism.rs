@@ -49,38 +49,10 @@ const BLUR: usize = 5;
 /// points and origins read-only, the splats, pyramid and atlas read-write), since some entry
 /// points use only some of the bindings.
 fn pipelines(gpu: &Gpu) -> Vec<wgpu::ComputePipeline> {
-    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let read = wgpu::BufferBindingType::Storage { read_only: true };
-    let write = wgpu::BufferBindingType::Storage { read_only: false };
-    let bind_layout = gpu
-        .device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ism"),
-            entries: &[
-                entry(0, wgpu::BufferBindingType::Uniform),
-                entry(1, read),
-                entry(2, read),
-                entry(3, write),
-                entry(4, write),
-                entry(5, write),
-            ],
-        });
-    let layout = gpu
-        .device
-        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ism"),
-            bind_group_layouts: &[Some(&bind_layout)],
-            immediate_size: 0,
-        });
+    use wgpu::BufferBindingType::{Storage, Uniform};
+    let read = Storage { read_only: true };
+    let write = Storage { read_only: false };
+    let layout = gpu.buffer_layout("ism", &[Uniform, read, read, write, write, write]);
     ENTRIES
         .iter()
         .map(|e| gpu.compute_entry("ism", e, Some(&layout)))

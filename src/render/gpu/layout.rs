@@ -141,7 +141,7 @@ pub struct GpuCamera {
 pub struct GpuShadeParams {
     /// The position the reflected lobes were aimed from (`LitScene::light_pos`).
     pub light_pos: [f32; 3],
-    /// (Point, cut node) pairs in this dispatch, and the index of the first.
+    /// The (point, leaf) pairs in this dispatch, and the index of the first pair.
     pub count: u32,
     pub first: u32,
     /// The points whose pairs these are.
@@ -150,9 +150,12 @@ pub struct GpuShadeParams {
     /// Texels per side of each node map.
     pub map_res: u32,
     pub map_bias: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
+    /// The index of the first (point, leaf) pair among all points' leaf pairs.
+    pub leaf_first: u32,
+    /// The (point, inner node) pairs in this dispatch, and the index of the first among all
+    /// points' inner-node pairs.
+    pub cluster_count: u32,
+    pub cluster_first: u32,
 }
 
 /// One pixel sample on a receiver, with its cut and BRDF lobes (`super::sg_shade`).
@@ -169,6 +172,13 @@ pub struct GpuShadePoint {
     /// Index of the point's first (point, cut node) pair.
     pub pair_start: u32,
     pub receiver: GpuReceiver,
+    /// The cut's leaves, which come first in its nodes, and the index of the point's first
+    /// (point, leaf) pair among all points' leaf pairs (its first inner-node pair's is
+    /// `pair_start − leaf_pair_start`).
+    pub leaf_count: u32,
+    pub leaf_pair_start: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 /// Per-slot sums of the lobes under a node (`cut::NodeLobe`).
@@ -636,9 +646,9 @@ pub fn layouts() -> Vec<StructLayout> {
             point_end,
             map_res,
             map_bias,
-            _pad0,
-            _pad1,
-            _pad2
+            leaf_first,
+            cluster_count,
+            cluster_first
         }),
         layout!(GpuShadePoint {
             x,
@@ -647,7 +657,11 @@ pub fn layouts() -> Vec<StructLayout> {
             cut_count,
             across,
             pair_start,
-            receiver
+            receiver,
+            leaf_count,
+            leaf_pair_start,
+            _pad0,
+            _pad1
         }),
         layout!(GpuNodeLobe {
             energy,

@@ -238,6 +238,41 @@ impl Gpu {
         self.compute_entry(pass, pass, None)
     }
 
+    /// A pipeline layout of one bind group whose binding i is a buffer of kind `bindings[i]`
+    /// (compute stage): for a pass whose entry points share bind groups but not all bindings.
+    fn buffer_layout(
+        &self,
+        label: &str,
+        bindings: &[wgpu::BufferBindingType],
+    ) -> wgpu::PipelineLayout {
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, &ty)| wgpu::BindGroupLayoutEntry {
+                binding: i as u32,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            })
+            .collect();
+        let group = self
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &entries,
+            });
+        self.device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(&group)],
+                immediate_size: 0,
+            })
+    }
+
     /// The compute pipeline of entry point `entry` of `pass`, with `layout` (or the layout
     /// derived from what the entry point uses). Built once per device and (pass, entry).
     fn compute_entry(

@@ -10,6 +10,10 @@
 //! every loop of an invocation once its loops together have run 65,535 iterations (llvmpipe's
 //! `LP_MAX_TGSI_LOOP_ITERATIONS`, shared by every loop of a shader), and one leaf's transport
 //! takes about a thousand: a per-point loop over a 141-leaf cut silently stopped after ~60.
+//! `sg_shade` has two entry points, one for the (point, leaf) pairs and one (`sg_shade_clusters`)
+//! for the (point, inner node) pairs, each cut listing its leaves first: lavapipe runs all the
+//! code an entry point can reach, so inner nodes evaluated beside the leaf transport paid for it
+//! (the stage took 25–30 % longer).
 //!
 //! Only what the cuts use is uploaded: the nodes that appear in some needed vertex's cut, the
 //! leaves among them and the maps they read, renumbered, so that the buffers stay far below
@@ -161,6 +165,8 @@ fn gather(light: &LightCuts, points: &[ShadePoint]) -> Result<LightData, GpuErro
     let mut node_id = vec![u32::MAX; tree.nodes.len()];
     let mut map_id = vec![u32::MAX; map_origins.len()];
     let mut range: Vec<(u32, u32)> = vec![(u32::MAX, 0); light.cuts.len()];
+    let mut leaves_in: Vec<u32> = vec![0; light.cuts.len()];
+    let mut leaf_pairs = 0u64;
     let mut d = LightData {
         params: GpuShadeParams {
             light_pos: lit.light_pos.to_array(),
@@ -188,8 +194,19 @@ fn gather(light: &LightCuts, points: &[ShadePoint]) -> Result<LightData, GpuErro
             )));
         }
         if range[v].0 == u32::MAX {
+            let leaf_count = cut
+                .iter()
+                .filter(|&&n| tree.nodes[n as usize].is_leaf())
+                .count();
             range[v] = (d.cut_nodes.len() as u32, cut.len() as u32);
-            for &n in cut {
+            leaves_in[v] = leaf_count as u32;
+            // Leaves first (the `sg_shade` entry point), then inner nodes
+            // (`sg_shade_clusters`), each in cut order.
+            let ordered = cut
+                .iter()
+                .filter(|&&n| tree.nodes[n as usize].is_leaf())
+                .chain(cut.iter().filter(|&&n| !tree.nodes[n as usize].is_leaf()));
+            for &n in ordered {
                 let slot = &mut node_id[n as usize];
                 if *slot == u32::MAX {
                     *slot = d.nodes.len() as u32;
@@ -231,6 +248,7 @@ fn gather(light: &LightCuts, points: &[ShadePoint]) -> Result<LightData, GpuErro
             }
         }
         let (start, count) = range[v];
+        let leaf_count = leaves_in[v];
         if pairs + u64::from(count) > u64::from(u32::MAX) {
             return Err(failed(format!(
                 "more than {} (point, cut node) pairs",
@@ -245,8 +263,13 @@ fn gather(light: &LightCuts, points: &[ShadePoint]) -> Result<LightData, GpuErro
             across: p.rx.across().to_array(),
             pair_start: pairs as u32,
             receiver: GpuReceiver::new(&p.rx),
+            leaf_count,
+            leaf_pair_start: leaf_pairs as u32,
+            _pad0: 0,
+            _pad1: 0,
         });
         pairs += u64::from(count);
+        leaf_pairs += u64::from(leaf_count);
     }
     // Empty buffers cannot be bound: one unused element each.
     if d.cut_nodes.is_empty() {
@@ -289,7 +312,25 @@ pub fn shade(
     }
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let pipeline = gpu.compute_pipeline("sg_shade");
+    let layout = {
+        use wgpu::BufferBindingType::{Storage, Uniform};
+        let read = Storage { read_only: true };
+        gpu.buffer_layout(
+            "sg_shade",
+            &[
+                Uniform,
+                read,
+                read,
+                read,
+                read,
+                read,
+                read,
+                Storage { read_only: false },
+            ],
+        )
+    };
+    let leaf_pipeline = gpu.compute_entry("sg_shade", "sg_shade", Some(&layout));
+    let cluster_pipeline = gpu.compute_entry("sg_shade", "sg_shade_clusters", Some(&layout));
     let sum_pipeline = gpu.compute_pipeline("sg_shade_sum");
     let out_bytes = (points.len() * 16) as u64;
     if out_bytes > gpu.max_binding {
@@ -351,13 +392,18 @@ pub fn shade(
                 }
                 point_end += 1;
             }
-            let last = &d.points[point_end - 1];
+            let (head, last) = (&d.points[point_first], &d.points[point_end - 1]);
             let count = last.pair_start as usize + last.cut_count as usize - first;
+            let leaf_first = head.leaf_pair_start as usize;
+            let leaves = last.leaf_pair_start as usize + last.leaf_count as usize - leaf_first;
             let params = GpuShadeParams {
-                count: count as u32,
+                count: leaves as u32,
                 first: first as u32,
                 point_first: point_first as u32,
                 point_end: point_end as u32,
+                leaf_first: leaf_first as u32,
+                cluster_count: (count - leaves) as u32,
+                cluster_first: (first - leaf_first) as u32,
                 ..d.params
             };
             let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -366,7 +412,7 @@ pub fn shade(
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             let bind = gpu.bind_buffers(
-                &pipeline.get_bind_group_layout(0),
+                &leaf_pipeline.get_bind_group_layout(0),
                 &[
                     &params_buf,
                     &bufs[0],
@@ -385,7 +431,8 @@ pub fn shade(
             let mut enc =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
             for (p, b, n) in [
-                (&pipeline, &bind, count),
+                (&leaf_pipeline, &bind, leaves),
+                (&cluster_pipeline, &bind, count - leaves),
                 (&sum_pipeline, &sum_bind, point_end - point_first),
             ] {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
