@@ -121,3 +121,45 @@ fn render_sums_the_vpls_on_the_gpu_when_asked_and_says_so() {
     );
     assert_eq!(log["vpl"]["indirect_on"], "cpu", "{}", log["vpl"]);
 }
+
+/// `--device auto` sums the VPLs on the GPU (and computes the direct light there) once the sum
+/// has at least `AUTO_GPU_MIN_PAIRS` sample–VPL pairs, where lavapipe is measured faster than
+/// the CPU, and says so; a smaller sum stays on the CPU. The ring at 16 px and 1 spp has
+/// 200 × 256 = 51,200 pairs, at 192 px and 4 spp 200 × 147,456 = 29.5 million.
+#[test]
+fn auto_sums_large_vpl_renders_on_the_gpu() {
+    use interreflect::render::cpu::vpl::AUTO_GPU_MIN_PAIRS;
+    let Some(_gpu) = common::gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/ring.toml");
+    let run = |name: &str, width: &str, spp: &str| {
+        let args = ["--method", "vpl", "--width", width, "--spp", spp];
+        common::render_cli(dir.path(), scene, name, &args)
+    };
+    let samples = |log: &serde_json::Value| {
+        ["width", "height", "spp"]
+            .iter()
+            .map(|k| log[k].as_u64().unwrap_or(0))
+            .product::<u64>()
+    };
+    let (stderr, log) = run("small", "16", "1");
+    assert!(samples(&log) * 200 < AUTO_GPU_MIN_PAIRS, "{}", log["width"]);
+    assert_eq!(log["vpl"]["indirect_on"], "cpu", "{}", log["vpl"]);
+    assert_eq!(log["vpl"]["direct_on"], "cpu", "{}", log["vpl"]);
+    assert!(!stderr.contains("notice:"), "{stderr}");
+    let (stderr, log) = run("large", "192", "4");
+    assert!(
+        samples(&log) * 200 >= AUTO_GPU_MIN_PAIRS,
+        "{}",
+        log["width"]
+    );
+    for stage in ["indirect_on", "direct_on"] {
+        let on = log["vpl"][stage].as_str().unwrap_or_default();
+        assert!(on.starts_with("gpu ("), "{stage}: {}", log["vpl"]);
+    }
+    assert_eq!(log["vpl"]["auto_gpu"], true, "{}", log["vpl"]);
+    assert!(!stderr.contains("notice:"), "{stderr}");
+    // The VPLs' weights and maps stay on the CPU under auto (slower on lavapipe).
+    assert_eq!(log["vpl"]["ism_on"], "cpu", "{}", log["vpl"]);
+    assert_eq!(log["vpl"]["vpls_on"], "cpu", "{}", log["vpl"]);
+}

@@ -174,6 +174,17 @@ fn phong_lobe(wo: vec3<f32>, wi: vec3<f32>, n: f32) -> f32 {
     return (n + 2.0) / (2.0 * PI) * pow_one_minus(d, n);
 }
 
+// The models a pipeline compiles (`render::gpu::layout::brdf_models`): bit i for model i, bits 5
+// and 6 for Cook-Torrance's Beckmann and GGX distributions; all by default. A pass that knows
+// its scene's materials sets it when its pipeline is built, so that the models no material
+// uses are not compiled in at all — lavapipe runs all the code a shader can reach, taken or
+// not (docs/gpu.md). A material whose model is left out evaluates to its diffuse term only.
+override BRDF_MODELS: u32 = 0xffffffffu;
+
+fn brdf_has(bit: u32) -> bool {
+    return (BRDF_MODELS & (1u << bit)) != 0u;
+}
+
 // `Brdf::eval`: f(wo, wi) in 1/sr without the cosine, in the local frame (z the normal); zero
 // when either direction is below the horizon, and zero rather than a non-finite value.
 fn brdf_eval(m: GpuBrdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
@@ -186,26 +197,30 @@ fn brdf_eval(m: GpuBrdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let ok = hv.w >= 0.0;
     switch m.model {
         case 1u: {
-            f += m.specular * phong_lobe(wo, wi, m.param);
+            if (brdf_has(1u)) {
+                f += m.specular * phong_lobe(wo, wi, m.param);
+            }
         }
         case 2u: {
-            if (ok) {
+            if (brdf_has(2u) && ok) {
                 f += m.specular * (blinn_phong_d(h, m.param) * v_cavity_visibility(wo, wi, h, hv.w));
             }
         }
         case 3u: {
-            if (ok) {
+            if (brdf_has(3u) && ok) {
                 let oh = max(hv.w, COS_EPS);
                 f += m.specular * (beckmann_d(h, m.param) / (4.0 * oh * oh));
             }
         }
         case 4u: {
             var spec = vec3<f32>(0.0);
-            if (ok) {
+            if (brdf_has(4u) && ok) {
                 var dv = 0.0;
                 if (m.distribution == 1u) {
-                    dv = ggx_d(h, m.param) * ggx_visibility(wo, wi, m.param);
-                } else {
+                    if (brdf_has(6u)) {
+                        dv = ggx_d(h, m.param) * ggx_visibility(wo, wi, m.param);
+                    }
+                } else if (brdf_has(5u)) {
                     let d = beckmann_d(h, m.param);
                     if (d > 0.0) {
                         let g2 = 1.0 / (1.0 + beckmann_lambda(wo, m.param) + beckmann_lambda(wi, m.param));

@@ -795,7 +795,8 @@ fn gpu_bench(args: &BenchArgs) -> anyhow::Result<i32> {
          process, read from its JSON log: `render <dragon> --method <m> --visibility approx \
          [--cut vertex] --width {w} --spp {spp}` (direct and indirect light), with `--device \
          gpu` and with `--device auto`. Both make the point light's shadow maps on the GPU; \
-         `auto` keeps the stages below on the CPU, so it is the GPU passes' CPU twin with the \
+         `auto` keeps the stages below on the CPU at this size (it moves vpl's sum to the GPU \
+         only from 10 million sample–VPL pairs), so it is the GPU passes' CPU twin with the \
          same inputs.\n",
         if args.quick { " --quick" } else { "" },
         interreflect::report::cpu_model()

@@ -76,10 +76,12 @@ pub struct RenderArgs {
     /// No progress bar and no log lines (errors and warnings still go to stderr).
     #[arg(long, short)]
     pub quiet: bool,
-    /// Where passes that have a GPU version run (so far: prt's relighting, and the shadow maps
-    /// of point lights for sg and vpl with --visibility vsm or approx). `gpu` also shades sg's
-    /// indirect light on the GPU with --cut vertex and --visibility approx (not `auto`: on a
-    /// software GPU it is slower than the CPU so far, docs/gpu.md).
+    /// Where passes that have a GPU version run. `auto` (GPU when an adapter exists): prt's
+    /// relighting, every light's shadow map for sg and vpl with --visibility vsm or approx, and
+    /// vpl's sum and direct light with --visibility approx from 10 million sample–VPL pairs
+    /// (where it is faster) up to 2 million samples. `gpu` also: sg's shading with --cut vertex and --visibility approx,
+    /// vpl's sum at any size, the VPLs' weights and imperfect shadow maps, the direct light and
+    /// the PNG's tonemap (slower than the CPU on a software GPU, docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Device::Auto)]
     pub device: Device,
     /// prt: SH order, bands l < order (default: methods.prt.order).
@@ -537,6 +539,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             "vpl stages: shadow maps {:.2} s, VPLs {:.2} s, imperfect shadow maps {:.2} s, shading {:.2} s",
             stats.seconds.shadow_maps, stats.seconds.vpls, stats.seconds.ism, stats.seconds.shading
         ));
+        if stats.auto_gpu {
+            log(format!(
+                "vpl: --device auto sums on the GPU: {} VPLs × {} samples, at least {} pairs",
+                stats.vpls,
+                u64::from(width) * u64::from(height) * u64::from(spp),
+                interreflect::render::cpu::vpl::AUTO_GPU_MIN_PAIRS
+            ));
+        }
         if let Some(adapter) = stats.indirect_on.strip_prefix("gpu ") {
             log(format!(
                 "vpl one-bounce sum on the GPU {adapter}: {:.2} s (primary hits included)",

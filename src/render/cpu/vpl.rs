@@ -19,8 +19,9 @@
 //! variance shadow maps and each VPL's imperfect shadow map.
 //!
 //! With `approx` and `--device gpu`, the one-bounce sum runs on the GPU (`render::gpu::vpl`);
-//! this module's loop is its twin. `auto` keeps it here: on lavapipe the CPU twin is faster
-//! (docs/gpu.md).
+//! this module's loop is its twin. `auto` runs it there from [`AUTO_GPU_MIN_PAIRS`] sample–VPL
+//! pairs (up to [`AUTO_GPU_MAX_SAMPLES`] samples), where lavapipe is measured faster; smaller
+//! sums stay here (docs/gpu.md).
 
 use super::reference::Progress;
 use super::sg::{
@@ -111,6 +112,11 @@ pub struct VplStats {
     /// (adapter)" (`--device gpu`), or "cpu (why the GPU failed)"; empty otherwise.
     #[serde(skip_serializing_if = "String::is_empty")]
     pub ism_on: String,
+    /// `--device auto` put the sum and the direct light on the GPU (at least
+    /// [`AUTO_GPU_MIN_PAIRS`] sample–VPL pairs, at most [`AUTO_GPU_MAX_SAMPLES`] samples, and
+    /// an adapter).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub auto_gpu: bool,
     /// VPLs of all lights.
     pub vpls: usize,
     pub clamp_distance: f32,
@@ -160,6 +166,19 @@ pub fn render_vpl_quiet(scene: &Scene, accel: &Accel, opts: &VplOptions) -> (Ima
     };
     render_vpl(scene, accel, opts, &p).expect("not cancelled")
 }
+
+/// Sample–VPL pairs from which `--device auto` sums the VPLs (and computes the direct light) on
+/// the GPU when an adapter exists. Measured on lavapipe (2 cores; 256 px, 4 spp, 200 VPLs:
+/// 52 million pairs): the GPU's sum 1.0× the CPU's on the ring, 1.4× on the bunny, 1.6× on the
+/// dragons; at 128 px and 4 spp (13 million) the ring's is at parity and the dragon's 1.5×, at
+/// 64 px and 1 spp (0.8 million) the GPU's fixed costs make it 0.5–0.6× (`docs/gpu.md`).
+pub const AUTO_GPU_MIN_PAIRS: u64 = 10_000_000;
+
+/// Pixel samples up to which `--device auto` takes the GPU path: it keeps every sample's primary
+/// hit and surface point in memory (about 300 bytes a sample, measured: 60 MB more peak memory
+/// for the dragon's 196,608), where the CPU path streams them; beyond it (600 MB) auto stays
+/// on the CPU.
+pub const AUTO_GPU_MAX_SAMPLES: u64 = 2_000_000;
 
 /// Renders `scene` with the VPL baseline. `None` when cancelled.
 pub fn render_vpl(
@@ -247,10 +266,27 @@ pub fn render_vpl(
         AtomicU64::new(0),
     );
 
-    // The stages on the GPU (--device gpu): primary hits cast first, for every sample; then the
-    // one-bounce sum (with `approx`) and the direct light (with a shadow map for every light).
+    // The stages on the GPU (--device gpu, or auto for a sum large enough to be faster there):
+    // primary hits cast first, for every sample; then the one-bounce sum (with `approx`) and the
+    // direct light (with a shadow map for every light).
     let t = Instant::now();
-    let hits = (opts.device == Device::Gpu).then(|| primary_hits(accel, &camera, spp, opts.seed));
+    let sum_pairs =
+        u64::from(opts.width) * u64::from(opts.height) * u64::from(spp) * stats.vpls as u64;
+    let gpu_stages = match opts.device {
+        Device::Gpu => true,
+        Device::Cpu => false,
+        Device::Auto => {
+            opts.indirect
+                && opts.visibility == Visibility::Approx
+                && !opts.cpu_sum
+                && sum_pairs >= AUTO_GPU_MIN_PAIRS
+                && u64::from(opts.width) * u64::from(opts.height) * u64::from(spp)
+                    <= AUTO_GPU_MAX_SAMPLES
+                && crate::render::gpu::Gpu::shared().is_ok()
+        }
+    };
+    stats.auto_gpu = opts.device == Device::Auto && gpu_stages;
+    let hits = gpu_stages.then(|| primary_hits(accel, &camera, spp, opts.seed));
     let mut gpu_sums: Option<Vec<VplShaded>> = None;
     if opts.indirect {
         stats.indirect_on = "cpu".into();
@@ -272,7 +308,7 @@ pub fn render_vpl(
     let t = Instant::now();
     let (on, gpu_direct) = direct_on_gpu(
         scene,
-        opts.device,
+        if gpu_stages { Device::Gpu } else { Device::Cpu },
         opts.direct,
         &maps,
         hits.as_deref().unwrap_or_default(),

@@ -104,7 +104,7 @@ pub fn direct(
     let gpu_materials: Vec<GpuBrdf> = materials.iter().map(GpuBrdf::from).collect();
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let pipeline = gpu.compute_pipeline("direct");
+    let pipeline = gpu.compute_pipeline_for("direct", &gpu_materials);
     let storage = |label: &str, bytes: &[u8]| {
         gpu.storage_buffer(
             "direct light",

@@ -265,6 +265,20 @@ pub struct GpuBrdf {
     pub _pad2: u32,
 }
 
+/// The value of the shaders' `BRDF_MODELS` override that compiles exactly the models `materials`
+/// use (`shaders/shared/brdf.wgsl`): bit `model` for each, and for Cook-Torrance bit 5
+/// (Beckmann) or 6 (GGX).
+pub fn brdf_models(materials: &[GpuBrdf]) -> u32 {
+    materials.iter().fold(0, |bits, m| {
+        let distribution = if m.model == 4 {
+            1 << (5 + m.distribution.min(1))
+        } else {
+            0
+        };
+        bits | 1 << m.model.min(31) | distribution
+    })
+}
+
 impl From<&crate::brdf::Brdf> for GpuBrdf {
     fn from(b: &crate::brdf::Brdf) -> Self {
         use crate::brdf::{Brdf, Distribution};
@@ -878,5 +892,48 @@ impl GpuNodeBound {
             peak_by_sharpness: peaks,
             ..GpuNodeBound::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::brdf::{Brdf, Distribution};
+    use glam::Vec3;
+
+    /// The override compiles the models the materials use and no other: a scene of Lambert and
+    /// GGX Cook-Torrance gets bits 0, 4 and 6; every model and distribution has its own bit.
+    #[test]
+    fn brdf_models_names_the_models_used() {
+        let lambert = Brdf::Lambert {
+            diffuse: Vec3::splat(0.5),
+        };
+        let ct = |distribution| Brdf::CookTorrance {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::splat(0.9),
+            roughness: 0.2,
+            distribution,
+        };
+        let gpu = |b: &[Brdf]| brdf_models(&b.iter().map(GpuBrdf::from).collect::<Vec<_>>());
+        assert_eq!(gpu(&[lambert, ct(Distribution::Ggx)]), 0b101_0001);
+        assert_eq!(gpu(&[ct(Distribution::Beckmann)]), 0b011_0000);
+        let phong = Brdf::Phong {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::ONE,
+            exponent: 20.0,
+        };
+        let blinn = Brdf::BlinnPhong {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::ONE,
+            exponent: 20.0,
+        };
+        let ward = Brdf::Ward {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::ONE,
+            roughness: 0.1,
+        };
+        assert_eq!(gpu(&[phong]), 0b10);
+        assert_eq!(gpu(&[blinn, ward]), 0b1100);
+        assert_eq!(gpu(&[]), 0);
     }
 }

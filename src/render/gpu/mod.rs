@@ -238,6 +238,17 @@ impl Gpu {
         self.compute_entry(pass, pass, None)
     }
 
+    /// The compute pipeline of `pass` for the scene's `materials`: the shared BRDF code compiled
+    /// with only the models they use (the `BRDF_MODELS` override, [`layout::brdf_models`]).
+    fn compute_pipeline_for(
+        &self,
+        pass: &str,
+        materials: &[layout::GpuBrdf],
+    ) -> wgpu::ComputePipeline {
+        let models = layout::brdf_models(materials);
+        self.compute_with(pass, pass, None, &[("BRDF_MODELS", f64::from(models))])
+    }
+
     /// A pipeline layout of one bind group whose binding i is a buffer of kind `bindings[i]`
     /// (compute stage): for a pass whose entry points share bind groups but not all bindings.
     fn buffer_layout(
@@ -281,11 +292,25 @@ impl Gpu {
         entry: &str,
         layout: Option<&wgpu::PipelineLayout>,
     ) -> wgpu::ComputePipeline {
-        let key = if entry == pass {
+        self.compute_with(pass, entry, layout, &[])
+    }
+
+    /// [`Self::compute_entry`] with values for the shader's override constants.
+    fn compute_with(
+        &self,
+        pass: &str,
+        entry: &str,
+        layout: Option<&wgpu::PipelineLayout>,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
+        let mut key = if entry == pass {
             pass.to_string()
         } else {
             format!("{pass}:{entry}")
         };
+        for (name, value) in constants {
+            key.push_str(&format!(" {name}={value}"));
+        }
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(p) = cache.get(&key) {
             return p.clone();
@@ -298,7 +323,10 @@ impl Gpu {
                 layout,
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 cache: None,
             });
         cache.insert(key, p.clone());

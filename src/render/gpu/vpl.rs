@@ -109,7 +109,8 @@ pub fn shade(
     }
     let device = &gpu.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let pipeline = gpu.compute_pipeline("vpl");
+    let gpu_materials: Vec<GpuBrdf> = materials.iter().map(GpuBrdf::from).collect();
+    let pipeline = gpu.compute_pipeline_for("vpl", &gpu_materials);
     let storage = |label: &str, bytes: &[u8]| {
         gpu.storage_buffer(
             "VPL shading",
@@ -118,7 +119,6 @@ pub fn shade(
             "render with --device cpu or a lower resolution",
         )
     };
-    let gpu_materials: Vec<GpuBrdf> = materials.iter().map(GpuBrdf::from).collect();
     // Empty buffers cannot be bound: one unused texel without maps.
     let no_maps = [[0.0f32; 2]];
     let atlas: &[[f32; 2]] = if maps.atlas.is_empty() {
