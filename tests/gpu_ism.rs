@@ -6,8 +6,8 @@
 
 mod common;
 
-use glam::Vec3;
 use interreflect::precompute::vpl;
+use interreflect::render::cpu::sg::light_fraction;
 use interreflect::render::cpu::surface::ray_epsilon;
 use interreflect::visibility::ism::{ImperfectShadowMaps, IsmOptions};
 use interreflect::visibility::vsm::VarianceShadowMap;
@@ -55,11 +55,7 @@ fn gpu_maps_match_the_cpu() {
         let map =
             VarianceShadowMap::build(&accel, scene.mesh.bounds(), &light, &scene.settings.vsm);
         let eps = ray_epsilon(&scene);
-        let visible = |p: Vec3| {
-            light
-                .incident(p)
-                .map_or(0.0, |inc| map.lit(p + inc.wi * eps))
-        };
+        let visible = |p| light_fraction(&accel, &light, Some(&map), p, eps);
         let vpls = vpl::generate(&vpl::sources(&scene), &light, 200, 5, &visible);
         assert!(vpls.len() > 100, "{name}: {} VPLs", vpls.len());
         let (pos, idx) = (&scene.mesh.positions, &scene.mesh.indices);

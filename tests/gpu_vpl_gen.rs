@@ -6,8 +6,8 @@
 
 mod common;
 
-use glam::Vec3;
 use interreflect::precompute::vpl;
+use interreflect::render::cpu::sg::light_fraction;
 use interreflect::render::cpu::surface::ray_epsilon;
 use interreflect::visibility::vsm::VarianceShadowMap;
 
@@ -29,11 +29,7 @@ fn gpu_weights_and_vpls_match_the_cpu() {
         let map =
             VarianceShadowMap::build(&accel, scene.mesh.bounds(), &light, &scene.settings.vsm);
         let eps = ray_epsilon(&scene);
-        let visible = |p: Vec3| {
-            light
-                .incident(p)
-                .map_or(0.0, |inc| map.lit(p + inc.wi * eps))
-        };
+        let visible = |p| light_fraction(&accel, &light, Some(&map), p, eps);
         let sources = vpl::sources(&scene);
         let cpu = vpl::source_weights(&sources, &light, &visible);
         let g = interreflect::render::gpu::vpl_gen::source_weights(

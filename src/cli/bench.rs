@@ -518,17 +518,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
                     ));
                 }
                 for (kind, light) in lights {
-                    let best = |f: &mut dyn FnMut()| {
-                        (0..3)
-                            .map(|_| {
-                                let t = Instant::now();
-                                f();
-                                t.elapsed().as_secs_f64()
-                            })
-                            .fold(f64::INFINITY, f64::min)
-                    };
                     let mut map = None;
-                    let tc = best(&mut || {
+                    let tc = best_of_three(&mut || {
                         map = Some(interreflect::visibility::vsm::VarianceShadowMap::build(
                             &accel,
                             sc.mesh.bounds(),
@@ -549,16 +540,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
                     let t_setup = t0.elapsed().as_secs_f64();
                     let mut err = None;
                     let mut passes: Option<interreflect::render::gpu::vsm::PassTimes> = None;
-                    let tg = best(&mut || match mapper.map_moments_timed(&setup, opts.blur) {
-                        Ok((_, t)) => {
-                            if let Some(t) = t
-                                && passes.is_none_or(|p| t.raster + t.blur < p.raster + p.blur)
-                            {
-                                passes = Some(t);
+                    let tg =
+                        best_of_three(&mut || match mapper.map_moments_timed(&setup, opts.blur) {
+                            Ok((_, t)) => {
+                                if let Some(t) = t
+                                    && passes.is_none_or(|p| t.raster + t.blur < p.raster + p.blur)
+                                {
+                                    passes = Some(t);
+                                }
                             }
-                        }
-                        Err(e) => err = Some(e.to_string()),
-                    });
+                            Err(e) => err = Some(e.to_string()),
+                        });
                     if let Some(e) = err {
                         bail!("shadow map on the GPU: {e}");
                     }
@@ -626,6 +618,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<i32> {
     write_page(&args.out.join("bench.md"), &md, t_all)
 }
 
+/// The shortest of three timed calls of `f`, in seconds.
+fn best_of_three(f: &mut dyn FnMut()) -> f64 {
+    (0..3)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// The VPLs' imperfect shadow maps splatted on the GPU (`render::gpu::ism`) against their CPU
 /// twin, with the point sampling both share timed on its own.
 fn ism_section(md: &mut String) -> anyhow::Result<()> {
@@ -667,11 +670,8 @@ fn ism_section(md: &mut String) -> anyhow::Result<()> {
             &sc.settings.vsm,
         );
         let eps = interreflect::render::cpu::surface::ray_epsilon(&sc);
-        let visible = |p: glam::Vec3| {
-            light
-                .incident(p)
-                .map_or(0.0, |inc| map.lit(p + inc.wi * eps))
-        };
+        let visible =
+            |p| interreflect::render::cpu::sg::light_fraction(&accel, &light, Some(&map), p, eps);
         let vpls = interreflect::precompute::vpl::generate(
             &interreflect::precompute::vpl::sources(&sc),
             &light,
@@ -680,15 +680,10 @@ fn ism_section(md: &mut String) -> anyhow::Result<()> {
             &visible,
         );
         let (pos, idx, opts) = (&sc.mesh.positions, &sc.mesh.indices, &sc.settings.ism);
+        // Best of three after one warm-up.
         let best = |f: &mut dyn FnMut()| {
             f();
-            (0..3)
-                .map(|_| {
-                    let t = Instant::now();
-                    f();
-                    t.elapsed().as_secs_f64()
-                })
-                .fold(f64::INFINITY, f64::min)
+            best_of_three(f)
         };
         let ts = best(&mut || {
             let sampler = IsmSampler::new(pos, idx, &vpls, opts, 1);

@@ -864,9 +864,7 @@ pub(super) fn scene_vpls(
                     };
                     match run() {
                         Ok((w, adapter)) => {
-                            if !place.starts_with("cpu (") {
-                                place = format!("gpu ({adapter})");
-                            }
+                            merge_place(&mut place, format!("gpu ({adapter})"));
                             Some(w)
                         }
                         Err(e) => {
@@ -923,7 +921,7 @@ pub(super) fn merge_place(all: &mut String, place: String) {
 }
 
 /// The light's visibility at surface point `p`: a shadow ray (0 or 1), or the shadow map.
-pub(super) fn light_fraction(
+pub fn light_fraction(
     accel: &Accel,
     light: &Light,
     map: Option<&VarianceShadowMap>,

@@ -270,8 +270,7 @@ pub fn render_vpl(
     // primary hits cast first, for every sample; then the one-bounce sum (with `approx`) and the
     // direct light (with a shadow map for every light).
     let t = Instant::now();
-    let sum_pairs =
-        u64::from(opts.width) * u64::from(opts.height) * u64::from(spp) * stats.vpls as u64;
+    let samples = u64::from(opts.width) * u64::from(opts.height) * u64::from(spp);
     let gpu_stages = match opts.device {
         Device::Gpu => true,
         Device::Cpu => false,
@@ -279,9 +278,8 @@ pub fn render_vpl(
             opts.indirect
                 && opts.visibility == Visibility::Approx
                 && !opts.cpu_sum
-                && sum_pairs >= AUTO_GPU_MIN_PAIRS
-                && u64::from(opts.width) * u64::from(opts.height) * u64::from(spp)
-                    <= AUTO_GPU_MAX_SAMPLES
+                && samples * stats.vpls as u64 >= AUTO_GPU_MIN_PAIRS
+                && samples <= AUTO_GPU_MAX_SAMPLES
                 && crate::render::gpu::Gpu::shared().is_ok()
         }
     };

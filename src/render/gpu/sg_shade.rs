@@ -194,19 +194,13 @@ fn gather(light: &LightCuts, points: &[ShadePoint]) -> Result<LightData, GpuErro
             )));
         }
         if range[v].0 == u32::MAX {
-            let leaf_count = cut
-                .iter()
-                .filter(|&&n| tree.nodes[n as usize].is_leaf())
-                .count();
-            range[v] = (d.cut_nodes.len() as u32, cut.len() as u32);
-            leaves_in[v] = leaf_count as u32;
             // Leaves first (the `sg_shade` entry point), then inner nodes
             // (`sg_shade_clusters`), each in cut order.
-            let ordered = cut
-                .iter()
-                .filter(|&&n| tree.nodes[n as usize].is_leaf())
-                .chain(cut.iter().filter(|&&n| !tree.nodes[n as usize].is_leaf()));
-            for &n in ordered {
+            let (leaf_nodes, inner_nodes): (Vec<u32>, Vec<u32>) =
+                cut.iter().partition(|&&n| tree.nodes[n as usize].is_leaf());
+            range[v] = (d.cut_nodes.len() as u32, cut.len() as u32);
+            leaves_in[v] = leaf_nodes.len() as u32;
+            for &n in leaf_nodes.iter().chain(&inner_nodes) {
                 let slot = &mut node_id[n as usize];
                 if *slot == u32::MAX {
                     *slot = d.nodes.len() as u32;
