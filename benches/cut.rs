@@ -6,14 +6,14 @@
 use divan::{Bencher, black_box};
 use glam::Vec3;
 use interreflect::accel::Accel;
-use interreflect::cut::{
+use interreflect::render::cpu::surface::{light_visible, ray_epsilon};
+use interreflect::scene::Scene;
+use interreflect::sg::transport::receiver::{ReceiverLobes, ReceiverOptions};
+use interreflect::sg::tree::ReflectorTree;
+use interreflect::sg::{
     CutCounters, CutOptions, LitScene, ReflectorPiece, build_tree, light_anchor, light_triangles,
     reflector_pieces,
 };
-use interreflect::precompute::tree::ReflectorTree;
-use interreflect::render::cpu::surface::{light_visible, ray_epsilon};
-use interreflect::scene::Scene;
-use interreflect::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use std::path::Path;
 
 fn main() {

@@ -125,10 +125,10 @@ fn sg_inner_product(bencher: Bencher) {
 /// study's material pairs in the mid-size configuration, per call.
 #[divan::bench]
 fn one_triangle_transport(bencher: Bencher) {
-    use interreflect::transport::study;
+    use interreflect::sg::transport::study;
     let mats = study::materials();
     let g = study::geometries()[1];
-    let opts = interreflect::transport::ReceiverOptions::default();
+    let opts = interreflect::sg::transport::ReceiverOptions::default();
     let pairs: Vec<_> = mats
         .iter()
         .flat_map(|a| mats.iter().map(move |b| (a.brdf, b.brdf)))

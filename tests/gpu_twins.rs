@@ -359,9 +359,9 @@ fn a_wrong_function_is_detected() {
 /// have an infinite bound on both sides (3e38 in WGSL).
 #[test]
 fn node_bound_matches_its_rust_twin() {
-    use interreflect::cut::node_bound;
     use interreflect::render::gpu::layout::GpuNodeBound;
     use interreflect::render::gpu::twins::run_node_bound;
+    use interreflect::sg::node_bound;
 
     let Some(gpu) = common::gpu() else { return };
     let (scene, pieces, tree) = scene_tree("bunny");
@@ -442,23 +442,23 @@ fn scene_tree(
     name: &str,
 ) -> (
     interreflect::scene::Scene,
-    Vec<interreflect::cut::ReflectorPiece>,
-    interreflect::precompute::tree::ReflectorTree,
+    Vec<interreflect::sg::ReflectorPiece>,
+    interreflect::sg::tree::ReflectorTree,
 ) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
     let scene = interreflect::scene::Scene::load(&path).unwrap();
-    let pieces = interreflect::cut::reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);
-    let tree = interreflect::cut::build_tree(&scene, &pieces);
+    let pieces = interreflect::sg::reflector_pieces(&scene, scene.mesh.diagonal() / 128.0);
+    let tree = interreflect::sg::build_tree(&scene, &pieces);
     (scene, pieces, tree)
 }
 
 /// The tree lit by the scene's first light, without shadows.
 fn unshadowed<'t>(
     scene: &interreflect::scene::Scene,
-    pieces: &[interreflect::cut::ReflectorPiece],
-    tree: &'t interreflect::precompute::tree::ReflectorTree,
-) -> interreflect::cut::LitScene<'t> {
-    use interreflect::cut::{LitScene, light_anchor, light_triangles};
+    pieces: &[interreflect::sg::ReflectorPiece],
+    tree: &'t interreflect::sg::tree::ReflectorTree,
+) -> interreflect::sg::LitScene<'t> {
+    use interreflect::sg::{LitScene, light_anchor, light_triangles};
     let light = scene.lights[0];
     let all = |_: glam::Vec3, _: u32| 1.0;
     let tris = light_triangles(scene, pieces, &tree.tri_order, &light, &all);
@@ -466,7 +466,7 @@ fn unshadowed<'t>(
         tree,
         tris,
         light_anchor(scene, &light),
-        interreflect::transport::receiver::ReceiverOptions::default(),
+        interreflect::sg::transport::receiver::ReceiverOptions::default(),
     )
 }
 
@@ -478,11 +478,11 @@ fn lit_rows(
     seed: u64,
 ) -> Vec<(
     interreflect::render::gpu::twins::ReceiverRow,
-    interreflect::transport::receiver::ReceiverLobes,
+    interreflect::sg::transport::receiver::ReceiverLobes,
 )> {
     use interreflect::render::gpu::layout::GpuReceiver;
     use interreflect::render::gpu::twins::ReceiverRow;
-    use interreflect::transport::receiver::ReceiverLobes;
+    use interreflect::sg::transport::receiver::ReceiverLobes;
     let mut rng = Rng::keyed(seed, 0, 0);
     let triangles = scene.mesh.indices.len() as u32;
     let mut rows = Vec::new();
@@ -565,7 +565,7 @@ fn transport_matches_its_rust_twins() {
             else {
                 continue;
             };
-            let rx = interreflect::transport::receiver::ReceiverLobes::new(
+            let rx = interreflect::sg::transport::receiver::ReceiverLobes::new(
                 scene.tri_material(hit.tri),
                 sp.frame.n,
                 wo,
@@ -573,11 +573,11 @@ fn transport_matches_its_rust_twins() {
             if rx.is_black() || !scene.tri_object(hit.tri).receiver {
                 continue;
             }
-            let mut c = interreflect::cut::CutCounters::default();
+            let mut c = interreflect::sg::CutCounters::default();
             lit.select(
                 sp.p,
                 &rx,
-                &interreflect::cut::CutOptions::default(),
+                &interreflect::sg::CutOptions::default(),
                 &mut scratch,
                 &mut c,
             );

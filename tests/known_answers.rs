@@ -330,8 +330,8 @@ fn reference_is_bit_identical_for_one_and_two_threads() {
 /// centroid averages out), and the cut stops at a 1 % bound.
 #[test]
 fn sg_two_squares_one_bounce_matches_quadrature() {
-    use interreflect::cut::CutOptions;
     use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
+    use interreflect::sg::CutOptions;
     let text = TWO_SQUARES.replace(
         "shape = { type = \"plane\", size = [1.0, 1.0] }\ntransform = { translate = [0.5, 0.0, 0.5] }",
         "shape = { type = \"plane\", size = [1.0, 1.0], subdivisions = 32 }\ntransform = { translate = [0.5, 0.0, 0.5] }",
@@ -388,8 +388,8 @@ fn sg_two_squares_one_bounce_matches_quadrature() {
 /// shadow rays and with shadow maps.
 #[test]
 fn sg_is_bit_identical_for_one_and_two_threads() {
-    use interreflect::cut::CutOptions;
     use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
+    use interreflect::sg::CutOptions;
     let scene = Scene::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/ring.toml"
@@ -446,8 +446,8 @@ fn ring_sg(
     visibility: interreflect::render::Visibility,
     direct: bool,
 ) -> (Image, interreflect::render::cpu::sg::SgStats) {
-    use interreflect::cut::CutOptions;
     use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
+    use interreflect::sg::CutOptions;
     let o = SgOptions {
         width: 32,
         height: 32,

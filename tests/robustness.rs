@@ -11,7 +11,6 @@
 
 use glam::Vec3;
 use interreflect::accel::Accel;
-use interreflect::cut::CutOptions;
 use interreflect::image::Image;
 use interreflect::precompute::prt::{
     PrtOptions, TransferKind, load_or_compute, relight_cpu, sh_lighting,
@@ -23,6 +22,7 @@ use interreflect::render::cpu::sg::{CutMode, SgOptions, render_sg_quiet};
 use interreflect::render::cpu::vpl::{VplOptions, default_clamp_distance, render_vpl};
 use interreflect::render::cpu::{Progress, RenderOptions};
 use interreflect::scene::Scene;
+use interreflect::sg::CutOptions;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 

@@ -3,7 +3,6 @@
 use super::progress;
 use anyhow::{Context, bail};
 use interreflect::accel::Accel;
-use interreflect::cut::CutOptions;
 use interreflect::fsutil::same_file;
 use interreflect::image::{Tonemap, write_exr, write_png, write_png_rgb8};
 use interreflect::memory::{self, Budget, Workload};
@@ -17,6 +16,7 @@ use interreflect::render::{Device, Method, Visibility};
 use interreflect::scene::{
     MAX_IMAGE_SIDE, MAX_NODE_MAPS, MAX_SPP, MAX_VPLS, RenderSettings, Scene, ScenePreview,
 };
+use interreflect::sg::CutOptions;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -871,7 +871,7 @@ fn workload(
         environment_texels,
         vertex_cut_nodes: (args.method == Method::Sg && cut_mode == CutMode::Vertex).then_some(
             if max_cut == 0 {
-                interreflect::cut::DEFAULT_MAX_CUT as u64
+                interreflect::sg::DEFAULT_MAX_CUT as u64
             } else {
                 max_cut as u64
             },

@@ -3,7 +3,7 @@
 //! `results/single-triangle.md`.
 
 use interreflect::fsutil::write_bytes_atomic;
-use interreflect::transport::study::{self, Row};
+use interreflect::sg::transport::study::{self, Row};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -59,7 +59,7 @@ pub fn run(args: SingleTriangleArgs) -> anyhow::Result<i32> {
     };
     let all = |_: &Row| true;
     // The per-pair tables show the defaults: mirror-image aim with the default receiver options.
-    let default_opts = interreflect::transport::ReceiverOptions::default();
+    let default_opts = interreflect::sg::transport::ReceiverOptions::default();
     let best = variants
         .iter()
         .position(|(aim, o, _)| *aim == study::Aim::MirrorImage && *o == default_opts)

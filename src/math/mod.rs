@@ -13,6 +13,12 @@ pub use sampling::Rng;
 
 use std::f64::consts::PI;
 
+/// Rec. 709 luminance: the scalar that errors and estimates are compared in.
+#[inline]
+pub fn luminance(c: glam::Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
 /// Barycentrics (u, v) of point p in triangle (a, b, c) (the weights of b and c), clamped to
 /// the triangle; the centroid for a degenerate triangle.
 pub fn triangle_barycentrics(

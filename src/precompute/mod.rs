@@ -7,5 +7,4 @@
 //! - [`prt`]: SH diffuse precomputed radiance transfer per vertex (the comparison method).
 
 pub mod prt;
-pub mod tree;
 pub mod vpl;

@@ -28,52 +28,15 @@ use crate::hash::Fnv;
 use crate::math::sampling::cosine_hemisphere;
 use crate::math::sh;
 use crate::math::{Frame, Rng};
-use crate::render::cpu::Progress;
+use crate::progress::Progress;
 use crate::scene::{Environment, Light, Scene};
+pub use crate::settings::{TransferKind, WindowKind};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 
 pub mod irradiance;
-
-/// What the transfer vectors include.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize, clap::ValueEnum,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum TransferKind {
-    /// Cosine only: no shadows, no interreflections (closed form).
-    Unshadowed,
-    /// Cosine and the vertex's own visibility of the lighting (shadows).
-    Shadowed,
-    /// Shadowed plus `bounces` diffuse reflections off the reflectors.
-    Interreflected,
-}
-
-/// The window applied to the SH lighting against ringing.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize, clap::ValueEnum,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum WindowKind {
-    None,
-    /// (1 + cos(π l / w)) / 2 below band w, 0 from w on (Sloan 2008).
-    Hanning,
-    /// sinc(π l / w).
-    Lanczos,
-}
-
-impl WindowKind {
-    /// The SH window of this kind whose zero is at band `width`.
-    pub fn window(self, width: f32) -> sh::Window {
-        match self {
-            WindowKind::None => sh::Window::None,
-            WindowKind::Hanning => sh::Window::Hanning { width },
-            WindowKind::Lanczos => sh::Window::Lanczos { width },
-        }
-    }
-}
 
 /// How to compute the transfer.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -261,7 +224,7 @@ pub fn precompute(
 ) -> Option<Transfer> {
     let info = vertex_info(scene);
     let n = sh::sh_count(opts.order);
-    let eps = crate::render::cpu::surface::ray_epsilon(scene);
+    let eps = crate::scene::ray_epsilon(scene);
     let pass = |f: &(dyn Fn(usize, &VertexInfo, &mut [Vec3]) + Sync)| -> Option<Vec<Vec3>> {
         let mut out = vec![Vec3::ZERO; info.len() * n];
         out.par_chunks_mut(CHUNK * n)

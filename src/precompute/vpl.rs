@@ -13,8 +13,8 @@
 //! Φ = E(y) V(y) A_t / (N_g P_t) (W, RGB), N_g the object's share: Σ Φ ρ estimates the flux the
 //! reflectors reflect without bias (test `vpl_power_sums_to_the_incident_flux`).
 
-use crate::cut::luminance;
 use crate::math::Rng;
+use crate::math::luminance;
 use crate::math::sampling::{Distribution1D, uniform_triangle};
 use crate::scene::{Light, Scene};
 use glam::Vec3;

@@ -181,10 +181,10 @@ pub struct RenderSettings {
     pub reference: ReferenceSpec,
     pub sg: SgSpec,
     /// Variance shadow maps (`[visibility]`).
-    pub vsm: crate::visibility::vsm::VsmOptions,
+    pub vsm: crate::settings::VsmOptions,
     /// Virtual point lights per light and their imperfect shadow maps (`[visibility]`).
     pub vpl_count: u32,
-    pub ism: crate::visibility::ism::IsmOptions,
+    pub ism: crate::settings::IsmOptions,
     /// SH diffuse PRT (`[methods.prt]`).
     pub prt: PrtSpec,
     /// The VPL baseline (`[methods.vpl]`).
@@ -747,13 +747,13 @@ impl Builder {
             seed: render.seed,
             reference: r,
             sg,
-            vsm: crate::visibility::vsm::VsmOptions {
+            vsm: crate::settings::VsmOptions {
                 resolution: v.shadow_map_resolution,
                 blur: v.vsm_blur,
                 light_bleeding: v.light_bleeding,
             },
             vpl_count: v.vpl_count,
-            ism: crate::visibility::ism::IsmOptions {
+            ism: crate::settings::IsmOptions {
                 resolution: v.ism_resolution,
                 points_per_map: v.ism_points,
                 bias: v.ism_bias,
@@ -1171,4 +1171,10 @@ diffuse = [0.5, 0.5, 0.5]
         .unwrap();
         assert!(far.mesh.diagonal().is_finite());
     }
+}
+
+/// Scene-wide ray epsilon: 1e-5 of the bounding-box diagonal (at least 1e-6).
+pub fn ray_epsilon(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.mesh.bounds();
+    ((hi - lo).length() * 1e-5).max(1e-6)
 }

@@ -80,7 +80,7 @@ pub struct VisibilitySpec {
 }
 
 fn default_node_maps() -> u32 {
-    crate::visibility::ism::IsmOptions::default().node_maps
+    crate::settings::IsmOptions::default().node_maps
 }
 
 fn default_vpl_count() -> u32 {
@@ -88,27 +88,27 @@ fn default_vpl_count() -> u32 {
 }
 
 fn default_ism_resolution() -> u32 {
-    crate::visibility::ism::IsmOptions::default().resolution
+    crate::settings::IsmOptions::default().resolution
 }
 
 fn default_ism_points() -> u32 {
-    crate::visibility::ism::IsmOptions::default().points_per_map
+    crate::settings::IsmOptions::default().points_per_map
 }
 
 fn default_ism_bias() -> f32 {
-    crate::visibility::ism::IsmOptions::default().bias
+    crate::settings::IsmOptions::default().bias
 }
 
 fn default_shadow_map_resolution() -> u32 {
-    crate::visibility::vsm::VsmOptions::default().resolution
+    crate::settings::VsmOptions::default().resolution
 }
 
 fn default_vsm_blur() -> u32 {
-    crate::visibility::vsm::VsmOptions::default().blur
+    crate::settings::VsmOptions::default().blur
 }
 
 fn default_light_bleeding() -> f32 {
-    crate::visibility::vsm::VsmOptions::default().light_bleeding
+    crate::settings::VsmOptions::default().light_bleeding
 }
 
 impl Default for VisibilitySpec {
@@ -353,7 +353,7 @@ pub struct PrtSpec {
     pub order: u32,
     /// What the transfer includes: "unshadowed", "shadowed" or "interreflected".
     #[serde(default = "default_prt_transfer")]
-    pub transfer: crate::precompute::prt::TransferKind,
+    pub transfer: crate::settings::TransferKind,
     /// Reflections added to the shadowed transfer when `transfer = "interreflected"`.
     #[serde(default = "one")]
     pub bounces: u32,
@@ -362,7 +362,7 @@ pub struct PrtSpec {
     pub samples: u32,
     /// Window applied to the SH lighting against ringing: "none", "hanning" or "lanczos".
     #[serde(default = "default_prt_window")]
-    pub window: crate::precompute::prt::WindowKind,
+    pub window: crate::settings::WindowKind,
     /// Band at which the window reaches 0 (Hanning) or its first zero (Lanczos); absent =
     /// twice the order (measured in `docs/prt.md`: the order itself blurs too much).
     #[serde(default)]
@@ -376,16 +376,16 @@ fn default_prt_order() -> u32 {
     5
 }
 
-fn default_prt_transfer() -> crate::precompute::prt::TransferKind {
-    crate::precompute::prt::TransferKind::Interreflected
+fn default_prt_transfer() -> crate::settings::TransferKind {
+    crate::settings::TransferKind::Interreflected
 }
 
 fn default_prt_samples() -> u32 {
     1024
 }
 
-fn default_prt_window() -> crate::precompute::prt::WindowKind {
-    crate::precompute::prt::WindowKind::Hanning
+fn default_prt_window() -> crate::settings::WindowKind {
+    crate::settings::WindowKind::Hanning
 }
 
 impl Default for PrtSpec {
@@ -415,7 +415,7 @@ pub struct SgSpec {
     pub max_cut: u32,
     /// Where cuts are chosen: "pixel" (every pixel sample) or "vertex" (every receiver vertex).
     #[serde(default = "default_cut_mode")]
-    pub cut: crate::render::cpu::sg::CutMode,
+    pub cut: crate::settings::CutMode,
     /// Samples per pixel of the SG methods (the reference's count is `render.spp`).
     #[serde(default = "one")]
     pub spp: u32,
@@ -426,15 +426,15 @@ pub struct SgSpec {
 }
 
 fn default_threshold() -> f32 {
-    crate::cut::DEFAULT_THRESHOLD
+    crate::settings::DEFAULT_THRESHOLD
 }
 
 fn default_max_cut() -> u32 {
-    crate::cut::DEFAULT_MAX_CUT
+    crate::settings::DEFAULT_MAX_CUT
 }
 
-fn default_cut_mode() -> crate::render::cpu::sg::CutMode {
-    crate::render::cpu::sg::CutMode::Pixel
+fn default_cut_mode() -> crate::settings::CutMode {
+    crate::settings::CutMode::Pixel
 }
 
 impl Default for SgSpec {

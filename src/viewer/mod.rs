@@ -461,7 +461,7 @@ impl FrameRenderer {
             direct: !job.indirect_only,
             indirect: true,
             brute: false,
-            cut: crate::cut::CutOptions {
+            cut: crate::sg::CutOptions {
                 threshold: s.threshold,
                 max_cut: s.max_cut,
             },

@@ -9,7 +9,7 @@ use crate::precompute::prt::{
     CacheStatus, NO_DISTANT_LIGHTING, PrtOptions, cache_path, load_or_compute_at, relight_cpu,
     sh_environment, sh_lighting_with, work_units,
 };
-use crate::render::cpu::Progress;
+use crate::progress::Progress;
 use crate::render::cpu::prt::{PrtImageOptions, render_prt_image};
 use crate::scene::Scene;
 use glam::Vec3;

@@ -24,38 +24,16 @@ use crate::accel::Accel;
 use crate::math::sampling::{Distribution1D, uniform_triangle};
 use crate::math::{Frame, Rng};
 use crate::precompute::vpl::Vpl;
-use crate::visibility::node_maps::MapOrigin;
+pub use crate::settings::IsmOptions;
 use crate::visibility::vsm::{bilinear_moments, chebyshev_upper_bound, min_variance};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-/// Settings of the imperfect shadow maps.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct IsmOptions {
-    /// Texels per side of each paraboloid map.
-    pub resolution: u32,
-    /// Scene points splatted into each map.
-    pub points_per_map: u32,
-    /// Depth bias, a fraction of the distance to the VPL (small: the moments carry the spread
-    /// of depths within a texel).
-    pub bias: f32,
-    /// A 3 × 3 blur of the moments after pull-push.
-    pub blur: bool,
-    /// sg `--visibility approx`: the tree nodes that get a ray-cast visibility map of their own
-    /// (`render::cpu::sg`, `docs/visibility.md`); 0 for the paper's proxy (3 nearest VPLs).
-    pub node_maps: u32,
-}
-
-impl Default for IsmOptions {
-    fn default() -> Self {
-        IsmOptions {
-            resolution: 32,
-            points_per_map: 4096,
-            bias: 0.02,
-            blur: true,
-            node_maps: 8000,
-        }
-    }
+/// A map's origin: position (a little above its surface) and the unit normal of its hemisphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapOrigin {
+    pub position: Vec3,
+    pub normal: Vec3,
 }
 
 /// The imperfect shadow maps of a set of VPLs.

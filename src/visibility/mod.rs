@@ -4,5 +4,4 @@
 //! through the BVH) stays the oracle they are measured against.
 
 pub mod ism;
-pub mod node_maps;
 pub mod vsm;

@@ -20,29 +20,9 @@
 
 use crate::accel::Accel;
 use crate::scene::Light;
+pub use crate::settings::VsmOptions;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-
-/// Settings of a variance shadow map (scene file: `[visibility]`).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct VsmOptions {
-    /// Texels per side of each face.
-    pub resolution: u32,
-    /// Radius of the Gaussian blur in texels (σ = radius / 2); 0 = none.
-    pub blur: u32,
-    /// Light-bleeding reduction b in [0, 1): p ← clamp((p − b) / (1 − b), 0, 1).
-    pub light_bleeding: f32,
-}
-
-impl Default for VsmOptions {
-    fn default() -> Self {
-        VsmOptions {
-            resolution: 512,
-            blur: 2,
-            light_bleeding: 0.2,
-        }
-    }
-}
 
 /// One perspective or orthographic face: texel (i, j) looks along forward + right·u + up·v
 /// (perspective) or from origin + right·u + up·v along forward (orthographic), u, v ∈ [−1, 1].

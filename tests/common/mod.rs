@@ -40,7 +40,7 @@ pub fn sg_render(
         direct,
         indirect: true,
         brute: false,
-        cut: interreflect::cut::CutOptions::default(),
+        cut: interreflect::sg::CutOptions::default(),
         mode,
         max_edge: scene.mesh.diagonal() / 128.0,
         visibility,

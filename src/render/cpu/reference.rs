@@ -27,6 +27,7 @@ use super::surface::{SurfacePoint, ray_epsilon, reflected_light};
 use crate::accel::Accel;
 use crate::image::Image;
 use crate::math::Rng;
+pub use crate::progress::{Progress, no_progress};
 use crate::scene::{Camera, Scene};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -62,14 +63,6 @@ pub struct RenderStats {
     pub rays: u64,
     /// Samples dropped because they were not finite (should stay 0).
     pub nonfinite_samples: u64,
-}
-
-/// Progress reporting and cancellation, shared by the worker threads.
-pub struct Progress<'a> {
-    /// Called with the number of work units just finished (see [`work_units`]).
-    pub done: &'a (dyn Fn(u64) + Sync),
-    /// When set, rendering stops early and `render` returns `None`.
-    pub cancel: &'a AtomicBool,
 }
 
 /// Light paths per work unit of the light-tracing pass.
@@ -601,9 +594,6 @@ impl Ctx<'_> {
 
 /// Key of the light-tracing random streams (camera streams use the pixel index there).
 const LIGHT_STREAM: u64 = u64::MAX;
-
-/// A progress sink that ignores everything (library use, tests).
-pub fn no_progress(_: u64) {}
 
 /// Convenience: render with no progress reporting or cancellation.
 pub fn render_quiet(scene: &Scene, accel: &Accel, opts: &RenderOptions) -> (Image, RenderStats) {

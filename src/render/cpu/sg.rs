@@ -14,35 +14,24 @@ use super::surface::{
     sample_points, scatter,
 };
 use crate::accel::{Accel, Hit};
-use crate::cut::{
-    CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, ReflectorPiece, build_tree,
-    light_anchor, light_triangles, reflector_pieces,
-};
 use crate::image::Image;
-use crate::precompute::tree::{self, ReflectorTree};
 use crate::precompute::vpl::{self, Vpl};
 use crate::render::{Device, Visibility};
 use crate::scene::{Light, Scene};
-use crate::transport::receiver::{ReceiverLobes, ReceiverOptions};
+pub use crate::settings::CutMode;
+use crate::sg::node_maps::NodeMaps;
+use crate::sg::transport::receiver::{ReceiverLobes, ReceiverOptions};
+use crate::sg::tree::{self, ReflectorTree};
+use crate::sg::{
+    CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, ReflectorPiece, build_tree,
+    light_anchor, light_triangles, reflector_pieces,
+};
 use crate::visibility::ism::{ImperfectShadowMaps, nearest_vpl_weights_among};
-use crate::visibility::node_maps::NodeMaps;
 use crate::visibility::vsm::VarianceShadowMap;
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-
-/// Where cuts are selected.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-#[derive(clap::ValueEnum)]
-pub enum CutMode {
-    /// One cut per pixel sample, at the shaded point.
-    Pixel,
-    /// One cut per receiver vertex (the paper's scheme); a pixel sample evaluates the cut of
-    /// its triangle's nearest vertex at its own position.
-    Vertex,
-}
 
 /// Options of [`render_sg`].
 #[derive(Clone, Copy, Debug)]
@@ -284,7 +273,7 @@ struct LightStage {
     shadow_maps_on: String,
     lit: Vec<(
         Vec<LitTriangle>,
-        Vec<crate::cut::LitNode>,
+        Vec<crate::sg::LitNode>,
         Vec3,
         ReceiverOptions,
     )>,
@@ -1137,7 +1126,7 @@ impl Ctx<'_> {
         let weight = |p: Vec3| -> f32 {
             let d = (p - xo).normalize_or_zero();
             let f = rx.lobes().iter().fold(rx.diffuse, |acc, h| acc + h.eval(d));
-            crate::cut::luminance(f).max(0.0)
+            crate::math::luminance(f).max(0.0)
         };
         let (mut num, mut den) = (0.0f32, 0.0f32);
         for (k, &p) in t.visibility_points().iter().enumerate() {

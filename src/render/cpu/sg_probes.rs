@@ -4,7 +4,7 @@
 //! `docs/sg-renderer.md`.
 
 use super::*;
-use crate::transport::brute_force::{Config, one_bounce_exact_shaded};
+use crate::sg::transport::brute_force::{Config, one_bounce_exact_shaded};
 
 /// What both probes set up: the scene's reflector pieces and tree at `w` pixels wide, with
 /// exact visibility, for its first light.
@@ -158,19 +158,19 @@ fn pixel_probe() {
             };
             let normals = pieces[tree.tri_order[i] as usize].normals;
             let exact = |n| lum(one_bounce_exact_shaded(&c, n, 1e-3, 10)) * lv * f;
-            let refl = crate::transport::Reflector {
+            let refl = crate::sg::transport::Reflector {
                 vertices: t.vertices,
                 brdf: c.brdf_y,
             };
-            let flat = crate::transport::reflector::reflected_sg_light(
+            let flat = crate::sg::transport::reflector::reflected_sg_light(
                 &refl,
                 light,
                 t.light_visibility,
                 1.0,
             )
             .map(|s| {
-                let s = crate::transport::aim_at_receiver(&s, sp.p);
-                let v = crate::transport::receiver::one_bounce_with(
+                let s = crate::sg::transport::aim_at_receiver(&s, sp.p);
+                let v = crate::sg::transport::receiver::one_bounce_with(
                     &s,
                     t.vertices,
                     sp.p,

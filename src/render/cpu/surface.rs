@@ -7,6 +7,8 @@ use crate::math::Frame;
 use crate::scene::{Incident, Light, Scene};
 use glam::Vec3;
 
+pub use crate::scene::ray_epsilon;
+
 /// A point on a surface, oriented towards the side it is seen from.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfacePoint {
@@ -52,12 +54,6 @@ impl SurfacePoint {
     pub fn offset(&self, eps: f32) -> Vec3 {
         self.p + self.ng * eps
     }
-}
-
-/// Scene-wide ray epsilon: 1e-5 of the bounding-box diagonal (at least 1e-6).
-pub fn ray_epsilon(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.mesh.bounds();
-    ((hi - lo).length() * 1e-5).max(1e-6)
 }
 
 /// Radiance that the light `light` reflects at `sp` towards the unit direction `w_out` (which

@@ -852,7 +852,7 @@ pub fn layouts() -> Vec<StructLayout> {
 }
 
 impl GpuReceiver {
-    pub fn new(rx: &crate::transport::receiver::ReceiverLobes) -> GpuReceiver {
+    pub fn new(rx: &crate::sg::transport::receiver::ReceiverLobes) -> GpuReceiver {
         let mut lobes = [GpuSg::default(); 4];
         for (slot, l) in lobes.iter_mut().zip(rx.lobes()) {
             *slot = GpuSg::from(*l);
@@ -869,7 +869,7 @@ impl GpuReceiver {
 
 impl GpuNodeBound {
     /// Node `i` of a lit scene.
-    pub fn new(lit: &crate::cut::LitScene, i: u32) -> GpuNodeBound {
+    pub fn new(lit: &crate::sg::LitScene, i: u32) -> GpuNodeBound {
         let n = &lit.tree.nodes[i as usize];
         let l = &lit.nodes[i as usize];
         let (has_cone, axis, half) = match n.cone {

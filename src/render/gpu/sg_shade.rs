@@ -26,9 +26,9 @@ use super::layout::{
     GpuShadeParams, GpuShadePoint,
 };
 use super::{Gpu, GpuError, describe, f32s};
-use crate::cut::{LitScene, LitTriangle};
-use crate::transport::receiver::ReceiverLobes;
-use crate::visibility::node_maps::NodeMaps;
+use crate::sg::node_maps::NodeMaps;
+use crate::sg::transport::receiver::ReceiverLobes;
+use crate::sg::{LitScene, LitTriangle};
 use glam::Vec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use wgpu::util::DeviceExt;

@@ -131,7 +131,7 @@ pub fn cpu(twin: Twin, q: &TwinQuery) -> [f32; 4] {
             q.a[3],
         )),
         Twin::ReduceBleeding => one(crate::visibility::vsm::reduce_bleeding(q.a[0], q.a[1])),
-        Twin::ClampedCosineMean => one(crate::cut::clamped_cosine_mean(q.a[0], q.a[1])),
+        Twin::ClampedCosineMean => one(crate::sg::clamped_cosine_mean(q.a[0], q.a[1])),
         Twin::IntegrateSg => one(crate::math::spherical_triangle::integrate_sg(
             v3(q.a),
             q.a[3],
@@ -139,7 +139,7 @@ pub fn cpu(twin: Twin, q: &TwinQuery) -> [f32; 4] {
             v3(q.c),
             v3(q.d),
         )),
-        Twin::CosineWeighted => one(crate::transport::receiver::cosine_weighted(
+        Twin::CosineWeighted => one(crate::sg::transport::receiver::cosine_weighted(
             &Sg::new(v3(q.a), q.a[3], Vec3::ONE),
             Vec3::new(q.b[3], q.c[3], q.d[3]),
             v3(q.b),

@@ -1,9 +1,9 @@
 use super::*;
-use crate::cut::tests::{grid, lit_config};
-use crate::cut::{LitScene, LitTriangle};
-use crate::transport::receiver::ReceiverOptions;
+use crate::sg::tests::{grid, lit_config};
+use crate::sg::transport::receiver::ReceiverOptions;
+use crate::sg::{LitScene, LitTriangle};
 
-fn lit(cfg: &crate::cut::tests::Config) -> LitScene<'_> {
+fn lit(cfg: &crate::sg::tests::Config) -> LitScene<'_> {
     LitScene::new(
         &cfg.tree,
         cfg.tris.clone(),

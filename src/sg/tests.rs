@@ -1,11 +1,16 @@
 use super::*;
 use crate::brdf::{Brdf, Distribution};
 use crate::math::Rng;
-use crate::precompute::tree::{TriInput, build_from};
-use crate::transport::receiver::{
+use crate::math::luminance;
+use crate::math::sg::Sg;
+use crate::sg::transport::Reflector;
+use crate::sg::transport::receiver::{
     CosineMode, ReceiverLobes, ReceiverOptions, cosine_weighted, projected_solid_angle,
 };
-use crate::transport::reflector::reflected_sg_light;
+use crate::sg::transport::reflector::reflected_sg_light;
+use crate::sg::tree::ReflectorTree;
+use crate::sg::tree::{TriInput, build_from};
+use glam::Vec3;
 use proptest::prelude::*;
 
 fn rvec(rng: &mut Rng) -> Vec3 {

@@ -18,17 +18,10 @@
 //! sieves at any affordable density), ray-cast maps 8–14 %, in about the same time.
 
 use crate::accel::Accel;
-use crate::cut::LitScene;
-use crate::visibility::ism::ImperfectShadowMaps;
+use crate::sg::LitScene;
+use crate::visibility::ism::{ImperfectShadowMaps, MapOrigin};
 use glam::Vec3;
 use std::collections::BinaryHeap;
-
-/// A map's origin: position (a little above its surface) and the unit normal of its hemisphere.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MapOrigin {
-    pub position: Vec3,
-    pub normal: Vec3,
-}
 
 /// Where the maps go: their origins, and for every tree node the map it uses.
 #[derive(Clone, Debug, PartialEq)]

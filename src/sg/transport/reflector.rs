@@ -1,12 +1,15 @@
 //! The reflector side: radiance reflected by one triangle as SG lobes in the outgoing direction.
 
-use super::receiver::MAX_STRETCH;
 use crate::brdf::Brdf;
 use crate::brdf::sg_fit::{MAX_LOBES, warped_lobes};
 use crate::math::Frame;
 use crate::math::sg::Sg;
 use crate::scene::Light;
 use glam::Vec3;
+
+/// Largest anisotropy given to a half-vector lobe (an incidence or view 6° above the
+/// surface): beyond it the tangent-plane model of the warped lobe no longer holds.
+pub const MAX_STRETCH: f32 = 10.0;
 
 /// A flat reflector triangle with its material.
 #[derive(Clone, Copy, Debug)]

@@ -1,6 +1,7 @@
 //! The receiver side: the one-bounce radiance one reflector triangle sends to a receiver point
 //! towards the eye, integrating SG lobes analytically over the triangle's solid angle.
 
+pub use super::reflector::MAX_STRETCH;
 use super::reflector::ReflectedSg;
 use crate::brdf::Brdf;
 use crate::brdf::sg_fit::{MAX_LOBES, warped_lobes};
@@ -234,10 +235,6 @@ pub fn one_bounce_with(
     }
     sum
 }
-
-/// Largest anisotropy given to a half-vector lobe (an incidence or view 6° above the
-/// surface): beyond it the tangent-plane model of the warped lobe no longer holds.
-pub const MAX_STRETCH: f32 = 10.0;
 
 /// Below this in-plane sharpness a lobe's anisotropy fades out: it is a property of the
 /// tangent plane about a sharp lobe, and wide lobes keep the isotropic warp (measured in
