@@ -1110,6 +1110,12 @@ fn append_transformed(mesh: &mut SceneMesh, data: &MeshData, xf: Mat4, object: u
     }
 }
 
+/// Scene-wide ray epsilon: 1e-5 of the bounding-box diagonal (at least 1e-6).
+pub fn ray_epsilon(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.mesh.bounds();
+    ((hi - lo).length() * 1e-5).max(1e-6)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1171,10 +1177,4 @@ diffuse = [0.5, 0.5, 0.5]
         .unwrap();
         assert!(far.mesh.diagonal().is_finite());
     }
-}
-
-/// Scene-wide ray epsilon: 1e-5 of the bounding-box diagonal (at least 1e-6).
-pub fn ray_epsilon(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.mesh.bounds();
-    ((hi - lo).length() * 1e-5).max(1e-6)
 }
