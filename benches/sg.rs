@@ -83,6 +83,28 @@ fn variant_pl_step(bencher: Bencher, step: f64) {
     });
 }
 
+/// The f32 SIMD kernel (`sg::kernel::integrate_sg_batch`) over the whole table (45 calls) with
+/// each instruction set this CPU runs (0: AVX2, 1: SSE2, 2: scalar lanes).
+#[divan::bench(args = [0, 1, 2])]
+fn kernel_batch(bencher: Bencher, which: usize) {
+    use interreflect::sg::kernel::{Isa, TriangleProblems, integrate_sg_batch};
+    let isa = [Isa::Avx2, Isa::Sse2, Isa::Scalar][which];
+    if !isa.available() {
+        return;
+    }
+    let mut probs = TriangleProblems::default();
+    for (p, l, a, b, c) in benchmark_inputs(&LAMBDAS) {
+        probs.push(p, l, a, b, c);
+    }
+    let mut out = vec![0.0; probs.len()];
+    bencher
+        .counter(ItemsCount::new(probs.len()))
+        .bench_local(|| {
+            integrate_sg_batch(isa, black_box(&probs), &mut out);
+            out[0]
+        });
+}
+
 fn lobes() -> Vec<(Sg, Sg)> {
     let mut out = Vec::new();
     for (i, l1) in [1.0f32, 30.0, 1000.0, 1e4].into_iter().enumerate() {

@@ -25,7 +25,8 @@
 //! - [`memory`]: the memory budget and the estimate of a render's peak memory.
 //! - [`viewer`]: the interactive viewer's state, camera controller, scripts and frames (the
 //!   window itself is `interreflect view`, in the binary).
-#![forbid(unsafe_code)]
+// `unsafe` only in `sg::kernel::simd` (SIMD intrinsics), which allows it explicitly.
+#![deny(unsafe_code)]
 // `!(x > 0.0)` is written on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 

@@ -142,12 +142,21 @@ struct Stats {
 
 /// Relative errors on the cases holding ≥ 1 % of the lobe; checks never NaN / negative / above Ω.
 fn sweep(f: fn(Vec3, f32, Vec3, Vec3, Vec3) -> f32, label: &str) -> (Stats, Vec<(f64, Stats)>) {
+    let values: Vec<f64> = cases_with_reference()
+        .iter()
+        .map(|(c, _)| eval(c, f))
+        .collect();
+    sweep_values(&values, label)
+}
+
+/// [`sweep`] for values computed elsewhere (one per case of [`cases_with_reference`]).
+fn sweep_values(values: &[f64], label: &str) -> (Stats, Vec<(f64, Stats)>) {
     let all = cases_with_reference();
     let mut overall = Stats::default();
     let mut per_lam: Vec<(f64, Stats)> = LAMBDAS.iter().map(|&l| (l, Stats::default())).collect();
     let mut worst = (0.0, String::new());
-    for (case, r) in all {
-        let (got, r) = (eval(case, f), *r);
+    for ((case, r), &got) in all.iter().zip(values) {
+        let r = *r;
         let [a, b, c] = case.tri;
         let omega = solid_angle(a.as_vec3(), b.as_vec3(), c.as_vec3()) as f64;
         assert!(
@@ -201,7 +210,10 @@ fn sweep(f: fn(Vec3, f32, Vec3, Vec3, Vec3) -> f32, label: &str) -> (Stats, Vec<
 }
 
 fn assert_bar(label: &str, f: fn(Vec3, f32, Vec3, Vec3, Vec3) -> f32) {
-    let (overall, per_lam) = sweep(f, label);
+    assert_bar_stats(label, sweep(f, label));
+}
+
+fn assert_bar_stats(label: &str, (overall, per_lam): (Stats, Vec<(f64, Stats)>)) {
     for (l, s) in &per_lam {
         assert!(s.n > 0, "{label}: no ≥1 % cases at λ {l}");
     }
@@ -618,6 +630,156 @@ proptest! {
             let got = f64::from(f(p, lam, a, b, c));
             let tol = if r >= 0.01 * lobe { 0.01 * r } else { 1e-4 * lobe };
             prop_assert!((got - r).abs() <= tol, "got {} ref {} (lobe {})", got, r, lobe);
+        }
+    }
+}
+
+/// Every case of the sweep (or of `inputs`) through the f32 SIMD kernel with `isa`'s lanes, in
+/// one batch, so that neighbouring lanes hold different problems.
+fn kernel_values(
+    isa: crate::sg::kernel::Isa,
+    inputs: &[(Vec3, f32, Vec3, Vec3, Vec3)],
+) -> Vec<f64> {
+    let mut probs = crate::sg::kernel::TriangleProblems::default();
+    for &(p, l, a, b, c) in inputs {
+        probs.push(p, l, a, b, c);
+    }
+    let mut out = vec![0.0; probs.len()];
+    crate::sg::kernel::integrate_sg_batch(isa, &probs, &mut out);
+    out.into_iter().map(f64::from).collect()
+}
+
+fn sweep_inputs() -> Vec<(Vec3, f32, Vec3, Vec3, Vec3)> {
+    cases_with_reference()
+        .iter()
+        .map(|(c, _)| {
+            let [a, b, cc] = c.tri;
+            (
+                c.p.as_vec3(),
+                c.lam as f32,
+                a.as_vec3(),
+                b.as_vec3(),
+                cc.as_vec3(),
+            )
+        })
+        .collect()
+}
+
+/// The f32 kernel keeps `integrate_sg`'s contract against the f64 cubature on the whole sweep
+/// (λ 0.01 … 10⁴, triangles 1e-4 … 1.2 rad, every axis placement): ≤ 1 % max and ≤ 0.2 % mean
+/// relative error where the triangle holds ≥ 1 % of the lobe, never negative, never above Ω.
+/// The bar is the contract's, not tightened to what the kernel reaches (its measured errors are
+/// printed and recorded in results/sg-performance.md), since the renderer relies on the contract.
+#[test]
+fn kernel_meets_accuracy_bar_with_every_isa() {
+    let inputs = sweep_inputs();
+    for isa in crate::sg::kernel::Isa::all_available() {
+        let label = format!("kernel {isa:?}");
+        assert_bar_stats(&label, sweep_values(&kernel_values(isa, &inputs), &label));
+    }
+}
+
+/// The kernel on the benchmark table against the default f64 routine: within 1 % where the
+/// triangle holds ≥ 1 % of the lobe (the contract), and within 1e-4 of the lobe's integral
+/// elsewhere (the same absolute floor as the random-configuration test).
+#[test]
+fn kernel_matches_f64_on_the_benchmark_table() {
+    let table = benchmark_inputs(&[1.0, 10.0, 100.0, 1000.0, 10000.0]);
+    for isa in crate::sg::kernel::Isa::all_available() {
+        let got = kernel_values(isa, &table);
+        let mut worst = 0.0f64;
+        for (&(p, l, a, b, c), g) in table.iter().zip(&got) {
+            let r = reference_triangle(
+                p.as_dvec3().normalize(),
+                f64::from(l),
+                a.as_dvec3().normalize(),
+                b.as_dvec3().normalize(),
+                c.as_dvec3().normalize(),
+                1e-11,
+            );
+            let lobe = super::super::sg::lobe_integral_f64(f64::from(l));
+            let tol = if r >= 0.01 * lobe {
+                0.01 * r
+            } else {
+                1e-4 * lobe
+            };
+            assert!(
+                (g - r).abs() <= tol,
+                "{isa:?}: λ {l}: kernel {g} reference {r}"
+            );
+            if r >= 0.01 * lobe {
+                worst = worst.max((g - r).abs() / r);
+            }
+        }
+        eprintln!("kernel {isa:?} on the benchmark table: worst relative error {worst:.2e}");
+    }
+}
+
+/// Degenerate inputs through the kernel: zero-area triangles, a vertex at the axis, the axis on
+/// an edge, zero vertices, λ = 0 and huge λ, non-finite input: finite, ≥ 0, ≤ Ω (+ f32 rounding
+/// of Ω itself, 1e-5 relative) and, where the f64 routine is exact (λ = 0: the solid angle), equal
+/// to it within the same rounding.
+#[test]
+fn kernel_degenerate_inputs_are_sane() {
+    let z = Vec3::Z;
+    let a = Vec3::new(0.1, 0.0, 1.0);
+    let b = Vec3::new(0.0, 0.1, 1.0);
+    let c = Vec3::new(-0.1, -0.1, 1.0);
+    let cases = [
+        (z, 10.0, a, a, b),
+        (z, 10.0, a, b, a + b),
+        (a.normalize(), 100.0, a, b, c),
+        ((a + b).normalize(), 100.0, a, b, c),
+        (z, 10.0, Vec3::ZERO, b, c),
+        (z, 0.0, a, b, c),
+        (z, 1e8, a, b, c),
+        (-z, 1e4, a, b, c),
+        (z, f32::NAN, a, b, c),
+        (z, 10.0, Vec3::splat(f32::NAN), b, c),
+        (Vec3::ZERO, 10.0, a, b, c),
+    ];
+    for isa in crate::sg::kernel::Isa::all_available() {
+        let got = kernel_values(isa, &cases);
+        for (&(p, l, a, b, c), &g) in cases.iter().zip(&got) {
+            let omega = f64::from(solid_angle(a, b, c));
+            assert!(
+                g.is_finite() && g >= 0.0 && g <= omega * (1.0 + 1e-5) + 1e-12,
+                "{isa:?}: p {p} λ {l}: {g} (Ω {omega})"
+            );
+            if l == 0.0 {
+                assert!(
+                    (g - omega).abs() <= 1e-5 * omega,
+                    "{isa:?}: λ = 0: {g} against Ω {omega}"
+                );
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, .. ProptestConfig::default() })]
+
+    /// The random configurations of `random_configurations_match_reference` through the kernel
+    /// with every ISA, with the same tolerance (the contract), the vertices at random distances
+    /// (0.2 to 5: the renderer passes the reflector's corners relative to the receiver, not
+    /// unit directions; the integral depends on the directions only).
+    #[test]
+    fn kernel_random_configurations_match_reference((p, lam, [a, b, c]) in config(), flip in any::<bool>(), d in prop::array::uniform3(0.2f32..5.0)) {
+        let p = if flip { -p } else { p };
+        let (ra, rb, rc) = (a * d[0], b * d[1], c * d[2]);
+        let r = reference_triangle(
+            p.as_dvec3().normalize(),
+            f64::from(lam),
+            a.as_dvec3().normalize(),
+            b.as_dvec3().normalize(),
+            c.as_dvec3().normalize(),
+            1e-11,
+        );
+        let lobe = super::super::sg::lobe_integral_f64(f64::from(lam));
+        let tol = if r >= 0.01 * lobe { 0.01 * r } else { 1e-4 * lobe };
+        for isa in crate::sg::kernel::Isa::all_available() {
+            let got = kernel_values(isa, &[(p, lam, ra, rb, rc)])[0];
+            prop_assert!((got - r).abs() <= tol, "{:?}: got {} ref {} (lobe {})", isa, got, r, lobe);
         }
     }
 }
