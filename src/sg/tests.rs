@@ -17,7 +17,7 @@ fn rvec(rng: &mut Rng) -> Vec3 {
     Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0
 }
 
-fn materials() -> [Brdf; 4] {
+pub(crate) fn materials() -> [Brdf; 4] {
     [
         Brdf::Lambert {
             diffuse: Vec3::new(0.7, 0.6, 0.5),
@@ -84,7 +84,7 @@ pub(crate) fn lit_config(tris: &[([Vec3; 3], usize)], light: Vec3) -> Config {
     Config { tris, tree, light }
 }
 
-fn config(seed: u64, n: usize, sheet: bool) -> Config {
+pub(crate) fn config(seed: u64, n: usize, sheet: bool) -> Config {
     let mut rng = Rng::keyed(seed, 1, 2);
     let light = Vec3::new(0.5, 3.0, 0.5) + rvec(&mut rng);
     let mut tris = Vec::new();
@@ -129,14 +129,19 @@ pub(crate) fn grid(k: usize) -> Config {
     lit_config(&tris, Vec3::new(0.7, 2.5, 0.3))
 }
 
-fn receiver(rng: &mut Rng) -> (Vec3, ReceiverLobes) {
+pub(crate) fn receiver(rng: &mut Rng) -> (Vec3, ReceiverLobes) {
+    receiver_with(rng, None)
+}
+
+/// A random receiver point and view; its material is `m` of [`materials`], or random.
+pub(crate) fn receiver_with(rng: &mut Rng, m: Option<usize>) -> (Vec3, ReceiverLobes) {
     let mats = materials();
     let x = rvec(rng) * 2.5;
     let n = rvec(rng).try_normalize().unwrap_or(Vec3::Y);
     let wo = (n + rvec(rng) * 0.9).try_normalize().unwrap_or(n);
     let wo = if wo.dot(n) > 0.05 { wo } else { n };
-    let m = (rng.next_u32() % 4) as usize;
-    (x, ReceiverLobes::new(&mats[m], n, wo))
+    let drawn = (rng.next_u32() % 4) as usize;
+    (x, ReceiverLobes::new(&mats[m.unwrap_or(drawn)], n, wo))
 }
 
 /// Σ of the exact leaf values under `node`.

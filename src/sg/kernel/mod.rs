@@ -6,12 +6,19 @@
 //!
 //! Speed and accuracy: `docs/sg-performance.md`, `results/sg-performance.md`.
 
+pub mod cluster;
+pub mod leaf;
+pub mod lobes;
+pub mod receivers;
 pub mod simd;
 pub mod triangle;
 pub mod v3;
 pub mod vmath;
 
 pub use simd::{Isa, Kernel, Vf, dispatch};
+
+#[cfg(test)]
+mod shading_tests;
 
 use glam::Vec3;
 use v3::V3;

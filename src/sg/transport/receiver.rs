@@ -298,6 +298,24 @@ impl Anisotropic {
         [q(e1, e1), q(e1, e2), q(e2, e2)]
     }
 
+    /// P b in the basis (e1, e2) of the tangent plane at `g` (unit), P this lobe's precision and
+    /// b the offset of its axis a from g, b̃ = a − c g with c = a·g: with lo = s/k, hi = s k,
+    /// P b̃ = c [lo (c a − g) − (hi − lo) (g·t) t], every term carrying its factor c, where the
+    /// matrix product would cancel (for lobes far apart b̃ lies almost along a, which P
+    /// nearly annihilates). `iso`: with k = 1.
+    fn precision_times_offset(&self, g: Vec3, e1: Vec3, e2: Vec3, iso: bool) -> [f32; 2] {
+        let s = self.iso.sharpness.max(0.0);
+        let a = self.iso.axis;
+        let c = a.dot(g);
+        let (lo, hi) = if iso {
+            (s, s)
+        } else {
+            (s / self.k, s * self.k)
+        };
+        let v = c * (lo * (c * a - g) - (hi - lo) * g.dot(self.t) * self.t);
+        [v.dot(e1), v.dot(e2)]
+    }
+
     /// The product with another lobe: the exact product of the isotropic lobes (axis,
     /// amplitude, sharpness), corrected in the tangent plane of this lobe's axis to the product
     /// of the anisotropic ones — precisions add, the centre moves to P⁻¹ P_h b (b the other
@@ -316,13 +334,19 @@ impl Anisotropic {
             .unwrap_or_else(|| Frame::from_normal(g.axis).to_world(Vec3::X));
         let e1 = e2.cross(g.axis);
         let b = [h.axis.dot(e1), h.axis.dot(e2)];
-        let aniso = TangentProduct::new(self.precision_in(e1, e2), other.precision_in(e1, e2), b);
+        let aniso = TangentProduct::new(
+            self.precision_in(e1, e2),
+            other.precision_in(e1, e2),
+            b,
+            other.precision_times_offset(g.axis, e1, e2, false),
+        );
         // The same with both lobes isotropic: every correction is a ratio to it, so that the
         // product is exactly the isotropic one when k = 1, at any angle between the lobes.
         let iso = TangentProduct::new(
             Anisotropic::isotropic(g).precision_in(e1, e2),
             Anisotropic::isotropic(h).precision_in(e1, e2),
             b,
+            other.precision_times_offset(g.axis, e1, e2, true),
         );
         let (Some(aniso), Some(iso)) = (aniso, iso) else {
             return Anisotropic::isotropic(&p0);
@@ -394,7 +418,9 @@ struct TangentProduct {
 }
 
 impl TangentProduct {
-    fn new(pa: [f32; 3], pb: [f32; 3], b: [f32; 2]) -> Option<TangentProduct> {
+    /// `pb_b`: P_b b, computed by the caller without cancellation
+    /// (`Anisotropic::precision_times_offset`).
+    fn new(pa: [f32; 3], pb: [f32; 3], b: [f32; 2], pb_b: [f32; 2]) -> Option<TangentProduct> {
         let p = [pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]];
         let det = p[0] * p[2] - p[1] * p[1];
         if !(det > 0.0) {
@@ -402,12 +428,12 @@ impl TangentProduct {
         }
         let mul = |m: [f32; 3], v: [f32; 2]| [m[0] * v[0] + m[1] * v[1], m[1] * v[0] + m[2] * v[1]];
         let inv = [p[2] / det, -p[1] / det, p[0] / det];
-        let pb_b = mul(pb, b);
         let centre = mul(inv, pb_b);
-        // bᵀ P_a P⁻¹ P_b b = bᵀ P_b b − (P_b b)ᵀ P⁻¹ (P_b b).
-        let attenuation = (b[0] * pb_b[0] + b[1] * pb_b[1]
-            - (pb_b[0] * centre[0] + pb_b[1] * centre[1]))
-            .max(0.0);
+        // bᵀ P_a P⁻¹ P_b b = (P_a b)·centre, which does not cancel (the equal form
+        // bᵀ P_b b − (P_b b)ᵀ P⁻¹ (P_b b) loses the digits of P_a/P_b when one lobe is much
+        // sharper than the other: 1 % of a tail product's value in f32, found by the SIMD twin).
+        let pa_b = mul(pa, b);
+        let attenuation = (pa_b[0] * centre[0] + pa_b[1] * centre[1]).max(0.0);
         let mean = 0.5 * (p[0] + p[2]);
         let d = (0.25 * (p[0] - p[2]).powi(2) + p[1] * p[1]).sqrt();
         let (hi, lo) = (mean + d, (mean - d).max(1e-20));
