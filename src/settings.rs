@@ -10,6 +10,12 @@ use crate::math::sh;
 #[serde(rename_all = "kebab-case")]
 #[derive(clap::ValueEnum)]
 pub enum CutMode {
+    /// One cut per group of samples — a screen tile's samples of one material — with a bound
+    /// that holds for every sample of the group, evaluated for all of them on the SIMD lanes
+    /// (`docs/sg-performance.md`: 10–15× faster than pixel cuts on ring and bunny, but its
+    /// group bound is loose near the receiver, which costs the dragon 21 points of rel_rmse at
+    /// 8×8 tiles, so pixel cuts stay the default).
+    Tile,
     /// One cut per pixel sample, at the shaded point.
     Pixel,
     /// One cut per receiver vertex (the paper's scheme); a pixel sample evaluates the cut of

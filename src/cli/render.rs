@@ -635,11 +635,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             s.visibility_rays
         ));
         log(format!(
-            "sg stages: tree {:.2} s, lighting {:.2} s, primary hits {:.2} s, vertex cuts {:.2} s, shading {:.2} s",
+            "sg stages: tree {:.2} s, lighting {:.2} s, visibility maps {:.2} s, primary hits {:.2} s, vertex cuts {:.2} s, tile cuts {:.2} s, shading {:.2} s",
             s.seconds.tree,
             s.seconds.lighting,
+            s.seconds.vpls,
             s.seconds.primary,
             s.seconds.vertex_cuts,
+            s.seconds.tile_cuts,
             s.seconds.shading
         ));
         if let Some(adapter) = s.shading_on.strip_prefix("gpu ") {

@@ -413,7 +413,9 @@ pub struct SgSpec {
     /// Maximum nodes per cut; 0 = no cap.
     #[serde(default = "default_max_cut")]
     pub max_cut: u32,
-    /// Where cuts are chosen: "pixel" (every pixel sample) or "vertex" (every receiver vertex).
+    /// Where cuts are chosen: "pixel" (every pixel sample, the default), "tile" (a screen
+    /// tile's samples of one material; faster, less accurate on the dragon:
+    /// `docs/sg-performance.md`) or "vertex" (every receiver vertex).
     #[serde(default = "default_cut_mode")]
     pub cut: crate::settings::CutMode,
     /// Samples per pixel of the SG methods (the reference's count is `render.spp`).

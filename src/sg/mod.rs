@@ -20,6 +20,7 @@
 
 pub mod bound;
 pub mod cluster;
+pub mod group;
 pub mod kernel;
 pub mod lighting;
 pub mod node_maps;

@@ -71,6 +71,9 @@ pub struct SgTimes {
     pub lighting: f64,
     pub primary: f64,
     pub vertex_cuts: f64,
+    /// Tile cuts (`CutMode::Tile`): selecting every group's cut and evaluating it with
+    /// visibility for the group's samples; the shading pass then adds the direct light.
+    pub tile_cuts: f64,
     /// The indirect light on the GPU (`render::gpu::sg_shade`, with `shading_on` "gpu …"):
     /// gathering and uploading the cuts, the shading itself, the read-back; 0 otherwise.
     pub gpu_shading: f64,
@@ -141,14 +144,14 @@ pub struct SgStats {
 }
 
 #[derive(Default)]
-struct Tally {
-    shading_points: AtomicU64,
+pub(super) struct Tally {
+    pub(super) shading_points: AtomicU64,
     cuts: AtomicU64,
     cut_size_sum: AtomicU64,
     cut_size_max: AtomicU64,
     evaluated: AtomicU64,
     leaves: AtomicU64,
-    rays: AtomicU64,
+    pub(super) rays: AtomicU64,
     bad: AtomicU64,
 }
 
@@ -159,14 +162,14 @@ thread_local! {
 }
 
 impl Tally {
-    fn add_cut(&self, size: usize, c: &CutCounters) {
+    pub(super) fn add_cut(&self, size: usize, c: &CutCounters) {
         THREAD_CUT_NODES.with(|n| n.set(n.get() + size as u64));
         self.cuts.fetch_add(1, Ordering::Relaxed);
         self.cut_size_sum.fetch_add(size as u64, Ordering::Relaxed);
         self.cut_size_max.fetch_max(size as u64, Ordering::Relaxed);
         self.add_counters(c);
     }
-    fn add_counters(&self, c: &CutCounters) {
+    pub(super) fn add_counters(&self, c: &CutCounters) {
         self.evaluated.fetch_add(c.evaluated, Ordering::Relaxed);
         self.leaves.fetch_add(c.leaves, Ordering::Relaxed);
     }
@@ -229,9 +232,10 @@ pub(crate) fn sample_offset(spp: u32, s: u32, seed: u64, pixel: u64) -> Vec2 {
     }
 }
 
-/// Work units of [`render_sg`] for a progress bar: one per image row and pass.
+/// Work units of [`render_sg`] for a progress bar: one per image row and pass (vertex and tile
+/// cuts take a pass before the pixels').
 pub fn sg_work_units(opts: &SgOptions) -> u64 {
-    opts.height as u64 * if opts.mode == CutMode::Vertex { 2 } else { 1 }
+    opts.height as u64 * if opts.mode == CutMode::Pixel { 1 } else { 2 }
 }
 
 /// Renders `scene` with the SG method. `None` when cancelled.
@@ -612,6 +616,26 @@ fn shade_frame(
     stats.direct_on = on;
     stats.seconds.gpu_direct = t.elapsed().as_secs_f64();
 
+    // Tile cuts: the indirect light of every sample, a tile's samples of one material at once.
+    let t = Instant::now();
+    let tiled = opts.mode == CutMode::Tile
+        && !brute
+        && opts.indirect
+        && !lits.is_empty()
+        && gpu_indirect.is_none()
+        && lits
+            .iter()
+            .all(|l| l.receiver == ReceiverOptions::default());
+    let tile_indirect = if tiled {
+        Some(ctx.tile_indirect(&hits, &tally, progress)?)
+    } else {
+        if opts.mode == CutMode::Tile && !brute {
+            (progress.done)(opts.height as u64);
+        }
+        None
+    };
+    stats.seconds.tile_cuts = t.elapsed().as_secs_f64();
+
     let t = Instant::now();
     let mut img = Image::new(opts.width, opts.height);
     let mut cut_sizes = vec![0f32; n_px];
@@ -637,7 +661,10 @@ fn shade_frame(
                         hits[p * spp + s].as_ref(),
                         vertex_cuts.as_ref(),
                         gpu_direct.as_ref().map(|g| g[p * spp + s]),
-                        gpu_indirect.as_ref().map(|g| g[p * spp + s]),
+                        gpu_indirect
+                            .as_ref()
+                            .or(tile_indirect.as_ref().map(|t| &t.0))
+                            .map(|g| g[p * spp + s]),
                         &mut scratch,
                         &tally,
                     );
@@ -648,7 +675,10 @@ fn shade_frame(
                     }
                 }
                 *out = (sum / spp as f64).as_vec3();
-                *size = (THREAD_CUT_NODES.with(|n| n.get()) - nodes_before) as f32 / spp as f32;
+                *size = match &tile_indirect {
+                    Some((_, sizes)) => sizes[p * spp..(p + 1) * spp].iter().sum::<f32>(),
+                    None => (THREAD_CUT_NODES.with(|n| n.get()) - nodes_before) as f32,
+                } / spp as f32;
             }
             (progress.done)(1);
         });
@@ -960,14 +990,14 @@ pub fn render_sg_quiet(scene: &Scene, accel: &Accel, opts: &SgOptions) -> (Image
 /// The visibility between reflectors and receivers for one light under `--visibility
 /// approx`: ray-cast maps at tree nodes (`[visibility] node_maps` > 0, the default), or the
 /// paper's proxy (`node_maps = 0`).
-enum ApproxVisibility {
+pub(super) enum ApproxVisibility {
     Nodes(NodeMaps),
     NearestVpls(NearestVpls),
 }
 
 /// The paper's proxy: the VPLs' imperfect shadow maps and, per tree node, the interpolation
 /// weights of its 3 nearest VPLs (from the node's area-weighted centroid).
-struct NearestVpls {
+pub(super) struct NearestVpls {
     ism: ImperfectShadowMaps,
     weights: Vec<[(u32, f32); 3]>,
 }
@@ -1008,7 +1038,7 @@ impl ApproxVisibility {
     }
 
     /// Visibility of tree node `node` from receiver point `x`.
-    fn node(&self, node: u32, x: Vec3) -> f32 {
+    pub(super) fn node(&self, node: u32, x: Vec3) -> f32 {
         match self {
             ApproxVisibility::Nodes(m) => m.visibility(node, x),
             ApproxVisibility::NearestVpls(v) => v.ism.interpolated(&v.weights[node as usize], x),
@@ -1025,20 +1055,20 @@ pub const NODE_VISIBILITY_DEPTH: u32 = 1;
 /// Cuts per light and vertex: `cuts[light][vertex]` (empty for vertices no sample needs).
 type VertexCuts = Vec<Vec<Vec<u32>>>;
 
-struct Ctx<'a> {
-    scene: &'a Scene,
-    accel: &'a Accel,
-    eps: f32,
-    lits: &'a [LitScene<'a>],
+pub(super) struct Ctx<'a> {
+    pub(super) scene: &'a Scene,
+    pub(super) accel: &'a Accel,
+    pub(super) eps: f32,
+    pub(super) lits: &'a [LitScene<'a>],
     /// Per light: its variance shadow map (`--visibility vsm`), or none (shadow rays).
-    maps: &'a [Option<VarianceShadowMap>],
+    pub(super) maps: &'a [Option<VarianceShadowMap>],
     /// Per light: the visibility maps of `--visibility approx` (empty otherwise).
-    vpl_vis: &'a [Option<ApproxVisibility>],
+    pub(super) vpl_vis: &'a [Option<ApproxVisibility>],
     /// Tree node of each leaf position (`tri_order` index), for `sg-brute` with those maps.
-    leaf_of: Vec<u32>,
-    opts: &'a SgOptions,
-    brute: bool,
-    camera_pos: Vec3,
+    pub(super) leaf_of: Vec<u32>,
+    pub(super) opts: &'a SgOptions,
+    pub(super) brute: bool,
+    pub(super) camera_pos: Vec3,
 }
 
 impl Ctx<'_> {
@@ -1049,7 +1079,7 @@ impl Ctx<'_> {
 
     /// Light `k`'s visibility maps between reflectors and receivers, under `--visibility
     /// approx`.
-    fn vpl_vis(&self, k: usize) -> Option<&ApproxVisibility> {
+    pub(super) fn vpl_vis(&self, k: usize) -> Option<&ApproxVisibility> {
         self.vpl_vis.get(k).and_then(Option::as_ref)
     }
 
@@ -1074,7 +1104,7 @@ impl Ctx<'_> {
     /// representative (brightest triangle) of each of the node's descendants
     /// [`NODE_VISIBILITY_DEPTH`] levels down, weighted by its subtree's light weight. Returns
     /// (fraction, rays).
-    fn node_visibility(&self, xo: Vec3, lit: &LitScene, node: u32) -> (f32, u64) {
+    pub(super) fn node_visibility(&self, xo: Vec3, lit: &LitScene, node: u32) -> (f32, u64) {
         let depth = NODE_VISIBILITY_DEPTH;
         let mut stack = [(node, 0u32); 2 << NODE_VISIBILITY_DEPTH];
         let mut len = 1;
@@ -1112,7 +1142,7 @@ impl Ctx<'_> {
     /// the points (≤ 1), a sharp one follows its own point — the specular point of a
     /// half-shadowed floor triangle is either fully lit or dark, not half lit. Returns
     /// (factor, rays).
-    fn triangle_visibility(
+    pub(super) fn triangle_visibility(
         &self,
         xo: Vec3,
         t: &LitTriangle,

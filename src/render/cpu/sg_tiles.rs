@@ -1,0 +1,320 @@
+//! Tile cuts (`CutMode::Tile`, `--cut tile`; `docs/sg-performance.md`): the samples of one
+//! screen tile that share a material form a group, which selects one cut with the group bound
+//! (`sg::group`) and evaluates every node of it for all its samples on the SIMD lanes; then
+//! each sample weighs the values by its own visibility.
+//!
+//! With shadow rays (`--visibility exact`) a sample traces rays for its cut's largest values
+//! until the untraced rest holds at most [`RAY_TAIL`] of its estimate; the rest is weighed by
+//! the traced values' mean visibility (weighted by luminance).
+
+use super::sg::{ApproxVisibility, Ctx, Tally};
+use crate::accel::Hit;
+use crate::math::luminance;
+use crate::render::cpu::Progress;
+use crate::render::cpu::surface::SurfacePoint;
+use crate::sg::group::{
+    GroupCut, GroupSummary, REPRESENTATIVES, SelectScratch, Summaries, evaluate_nodes,
+};
+use crate::sg::kernel::receivers::Receivers;
+use crate::sg::kernel::simd::Isa;
+use crate::sg::transport::receiver::ReceiverLobes;
+use crate::sg::{CutCounters, LitScene};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+
+/// Largest part of a sample's estimate whose visibility is not traced but taken as the traced
+/// part's mean (exact visibility). Measured on ring, dragon and bunny at 256×192
+/// (`docs/sg-performance.md`).
+pub const RAY_TAIL: f32 = 0.05;
+
+/// Samples per group at most (the tile's side shrinks with the samples per pixel).
+pub const GROUP_SAMPLES: usize = 64;
+
+/// Tile side in pixels for `spp` samples per pixel: about [`GROUP_SAMPLES`] samples a tile,
+/// or the side the environment variable `INTERREFLECT_TILE_SIDE` asks for (a measurement knob:
+/// `docs/sg-performance.md` sweeps it).
+pub fn tile_side(spp: u32) -> usize {
+    if let Some(side) = std::env::var("INTERREFLECT_TILE_SIDE")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .filter(|&v| (1..=64).contains(&v))
+    {
+        return side;
+    }
+    let per_side = (spp as f64).sqrt().ceil() as usize;
+    (8 / per_side.max(1)).max(1)
+}
+
+/// One receiver sample of a tile.
+struct Sample {
+    /// Index into the frame's samples (pixel × spp + s).
+    index: usize,
+    material: (u32, usize),
+    x: Vec3,
+    xo: Vec3,
+    rx: ReceiverLobes,
+}
+
+/// What a tile returns: per receiver sample, its index, indirect light and cut size.
+type TileOut = Vec<(usize, Vec3, f32)>;
+
+impl Ctx<'_> {
+    /// The indirect light of every sample (`hits`) with tile cuts, and each sample's cut size
+    /// (summed over the lights). `None` when cancelled.
+    pub(super) fn tile_indirect(
+        &self,
+        hits: &[Option<Hit>],
+        tally: &Tally,
+        progress: &Progress,
+    ) -> Option<(Vec<Vec3>, Vec<f32>)> {
+        let isa = Isa::detect();
+        let summaries: Vec<Summaries> = self.lits.iter().map(Summaries::new).collect();
+        let (w, h) = (self.opts.width as usize, self.opts.height as usize);
+        let spp = self.opts.spp as usize;
+        let side = tile_side(self.opts.spp);
+        let (tx, ty) = (w.div_ceil(side), h.div_ceil(side));
+        let tiles: Vec<TileOut> = (0..tx * ty)
+            .into_par_iter()
+            .map_init(TileScratch::default, |scratch, t| {
+                if progress.cancel.load(Ordering::Relaxed) {
+                    return Vec::new();
+                }
+                let (x0, y0) = ((t % tx) * side, (t / tx) * side);
+                let out = self.shade_tile(
+                    isa,
+                    &summaries,
+                    hits,
+                    (x0, y0, side, w, h, spp),
+                    tally,
+                    scratch,
+                );
+                if t % tx == tx - 1 {
+                    (progress.done)(side.min(h - y0) as u64);
+                }
+                out
+            })
+            .collect();
+        if progress.cancel.load(Ordering::Relaxed) {
+            return None;
+        }
+        let mut values = vec![Vec3::ZERO; hits.len()];
+        let mut sizes = vec![0f32; hits.len()];
+        for (i, v, s) in tiles.into_iter().flatten() {
+            values[i] = v;
+            sizes[i] = s;
+        }
+        Some((values, sizes))
+    }
+
+    /// The tile at pixel (x0, y0), `side` pixels wide, of a `w` × `h` image.
+    fn shade_tile(
+        &self,
+        isa: Isa,
+        summaries: &[Summaries],
+        hits: &[Option<Hit>],
+        (x0, y0, side, w, h, spp): (usize, usize, usize, usize, usize, usize),
+        tally: &Tally,
+        scratch: &mut TileScratch,
+    ) -> TileOut {
+        let mut samples = Vec::new();
+        for y in y0..(y0 + side).min(h) {
+            for x in x0..(x0 + side).min(w) {
+                for s in 0..spp {
+                    let index = (y * w + x) * spp + s;
+                    if let Some(sample) = self.receiver_sample(hits[index].as_ref(), index) {
+                        samples.push(sample);
+                    }
+                }
+            }
+        }
+        // Groups: one material each, in a fixed order (material, then sample index).
+        samples.sort_by_key(|s| (s.material, s.index));
+        let mut out = Vec::with_capacity(samples.len());
+        for group in samples.chunk_by(|a, b| a.material == b.material) {
+            for chunk in group.chunks(GROUP_SAMPLES) {
+                self.shade_group(isa, summaries, chunk, tally, scratch, &mut out);
+            }
+        }
+        out
+    }
+
+    /// A sample's receiver data, when it receives indirect light.
+    fn receiver_sample(&self, hit: Option<&Hit>, index: usize) -> Option<Sample> {
+        let hit = hit?;
+        if !self.scene.tri_object(hit.tri).receiver {
+            return None;
+        }
+        let wo = (self.camera_pos - self.scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+        let sp = SurfacePoint::from_hit(self.scene, hit, wo)?;
+        let rx = ReceiverLobes::new(self.scene.tri_material(hit.tri), sp.frame.n, wo);
+        if rx.is_black() {
+            return None;
+        }
+        Some(Sample {
+            index,
+            material: (self.scene.tri_material_index(hit.tri), rx.lobes().len()),
+            x: sp.p,
+            xo: sp.offset(self.eps),
+            rx,
+        })
+    }
+
+    fn shade_group(
+        &self,
+        isa: Isa,
+        summaries: &[Summaries],
+        group: &[Sample],
+        tally: &Tally,
+        sc: &mut TileScratch,
+        out: &mut TileOut,
+    ) {
+        let n = group.len();
+        let points: Vec<(Vec3, ReceiverLobes)> = group.iter().map(|s| (s.x, s.rx)).collect();
+        let summary = GroupSummary::new(&points);
+        sc.rec.clear();
+        for s in group {
+            sc.rec.push(s.x, &s.rx, true);
+        }
+        sc.rec.pad();
+        sc.reps.clear();
+        let m = n.min(REPRESENTATIVES);
+        for j in 0..m {
+            let s = &group[j * n / m];
+            sc.reps.push(s.x, &s.rx, true);
+        }
+        sc.reps.pad();
+        let mut radiance = vec![Vec3::ZERO; n];
+        let mut size = 0usize;
+        let mut rays = 0u64;
+        for (k, (lit, sums)) in self.lits.iter().zip(summaries).enumerate() {
+            tally.shading_points.fetch_add(n as u64, Ordering::Relaxed);
+            lit.select_group(
+                isa,
+                sums,
+                &summary,
+                &sc.reps,
+                &self.opts.cut,
+                &mut sc.select,
+                &mut sc.cut,
+            );
+            tally.add_cut(
+                sc.cut.nodes.len(),
+                &CutCounters {
+                    evaluated: sc.cut.evaluated,
+                    leaves: sc.cut.leaves,
+                },
+            );
+            size += sc.cut.nodes.len();
+            let cut = &sc.cut;
+            evaluate_nodes(
+                isa,
+                lit,
+                sums,
+                &cut.nodes,
+                &cut.bounds,
+                &sc.rec,
+                &mut sc.values,
+            );
+            let leaves = cut
+                .nodes
+                .iter()
+                .filter(|&&v| lit.tree.nodes[v as usize].is_leaf())
+                .count();
+            tally.add_counters(&CutCounters {
+                evaluated: (cut.nodes.len() * n) as u64,
+                leaves: (leaves * n) as u64,
+            });
+            for (j, s) in group.iter().enumerate() {
+                let value = |i: usize| sc.values[i * n + j];
+                radiance[j] += match self.vpl_vis(k) {
+                    Some(vv) => approx_visible(vv, &cut.nodes, value, s.xo),
+                    None => {
+                        let (v, r) =
+                            self.traced_visible(lit, k, &cut.nodes, value, s, &mut sc.order);
+                        rays += r;
+                        v
+                    }
+                };
+            }
+        }
+        tally.rays.fetch_add(rays, Ordering::Relaxed);
+        let size = size as f32;
+        out.extend(group.iter().zip(radiance).map(|(s, v)| (s.index, v, size)));
+    }
+
+    /// A sample's radiance over a cut with shadow rays: rays for the largest values until the
+    /// untraced rest is at most [`RAY_TAIL`] of the sum, which takes the traced part's mean
+    /// visibility. Returns (radiance, rays).
+    fn traced_visible(
+        &self,
+        lit: &LitScene,
+        k: usize,
+        nodes: &[u32],
+        value: impl Fn(usize) -> Vec3,
+        s: &Sample,
+        order: &mut Vec<(f32, u32)>,
+    ) -> (Vec3, u64) {
+        order.clear();
+        let mut total = 0.0f32;
+        for i in 0..nodes.len() {
+            let l = luminance(value(i)).max(0.0);
+            if l > 0.0 {
+                order.push((l, i as u32));
+                total += l;
+            }
+        }
+        // Largest first; ties by position, so the order is deterministic.
+        order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let (mut traced, mut seen, mut rays) = (0.0f32, 0.0f32, 0u64);
+        let (mut lit_sum, mut rest) = (Vec3::ZERO, Vec3::ZERO);
+        for &(l, i) in order.iter() {
+            let v = value(i as usize);
+            if total - traced <= RAY_TAIL * total {
+                rest += v;
+                continue;
+            }
+            let node = nodes[i as usize];
+            let tn = &lit.tree.nodes[node as usize];
+            let (f, r) = if tn.is_leaf() {
+                self.triangle_visibility(s.xo, &lit.tris[tn.first as usize], k, &s.rx)
+            } else {
+                self.node_visibility(s.xo, lit, node)
+            };
+            rays += r;
+            traced += l;
+            seen += l * f;
+            lit_sum += v * f;
+        }
+        let mean = if traced > 0.0 { seen / traced } else { 1.0 };
+        (lit_sum + rest * mean, rays)
+    }
+}
+
+/// A sample's radiance over a cut with the visibility maps of `--visibility approx`.
+fn approx_visible(
+    vv: &ApproxVisibility,
+    nodes: &[u32],
+    value: impl Fn(usize) -> Vec3,
+    xo: Vec3,
+) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    for (i, &node) in nodes.iter().enumerate() {
+        let v = value(i);
+        if v != Vec3::ZERO {
+            l += v * vv.node(node, xo);
+        }
+    }
+    l
+}
+
+/// Per-thread buffers of the tile pass.
+#[derive(Default)]
+struct TileScratch {
+    rec: Receivers,
+    reps: Receivers,
+    select: SelectScratch,
+    cut: GroupCut,
+    values: Vec<Vec3>,
+    order: Vec<(f32, u32)>,
+}
