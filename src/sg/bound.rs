@@ -4,7 +4,7 @@
 
 use super::lighting::{LitNode, LitScene, SHARPNESS_BINS};
 use super::transport::receiver::ReceiverLobes;
-use super::tree::Node;
+use super::tree::{Node, NormalCone};
 use crate::math::luminance;
 use glam::Vec3;
 
@@ -109,24 +109,8 @@ fn node_bound_parts(
         }
         _ => None,
     };
-    let mut radiance = lit.diffuse;
-    for (edge, peak) in SHARPNESS_BINS.iter().zip(&lit.peak_by_sharpness) {
-        let f = match gap {
-            Some(g) => (edge * cos_minus_one(g)).min(0.0).exp(),
-            None => 1.0,
-        };
-        radiance += *peak * f;
-    }
-    // Each triangle's solid angle is ∫ cos θ_y / r² dA ≤ A cos_max / d²: the largest |cos| between
-    // a normal of the cone (either orientation) and a direction from the box to x.
-    let cos_max = match (cone, n.cone) {
-        (Some((dir, half)), Some(c)) => {
-            let g = angle(c.axis, dir);
-            let g = g.min(std::f32::consts::PI - g);
-            (g - c.half_angle - half).max(0.0).cos()
-        }
-        _ => 1.0,
-    };
+    let radiance = radiance_bound(lit, gap);
+    let cos_max = cos_max_bound(n.cone, cone);
     if let Some(p) = parts {
         p[..4].copy_from_slice(&[
             luminance(radiance),
@@ -139,6 +123,35 @@ fn node_bound_parts(
     radiance * hmax * (1.001 * cos_max / d2)
 }
 
+/// The reflected radiance of the node's triangles towards directions at least `gap` (radians;
+/// `None`: no gap known) from their lobes' peaks: the diffuse part plus each sharpness bin's
+/// peak falling off with the bin's lower edge.
+pub(crate) fn radiance_bound(lit: &LitNode, gap: Option<f32>) -> Vec3 {
+    let mut radiance = lit.diffuse;
+    for (edge, peak) in SHARPNESS_BINS.iter().zip(&lit.peak_by_sharpness) {
+        let f = match gap {
+            Some(g) => (edge * cos_minus_one(g)).min(0.0).exp(),
+            None => 1.0,
+        };
+        radiance += *peak * f;
+    }
+    radiance
+}
+
+/// Each triangle's solid angle is ∫ cos θ_y / r² dA ≤ A cos_max / d²: the largest |cos| between
+/// a normal of the node's cone `normals` (either orientation) and a direction of the cone
+/// `towards` (axis, half-angle) from the receiver to the node; 1 when either is unknown.
+pub(crate) fn cos_max_bound(normals: Option<NormalCone>, towards: Option<(Vec3, f32)>) -> f32 {
+    match (towards, normals) {
+        (Some((dir, half)), Some(c)) => {
+            let g = angle(c.axis, dir);
+            let g = g.min(std::f32::consts::PI - g);
+            (g - c.half_angle - half).max(0.0).cos()
+        }
+        _ => 1.0,
+    }
+}
+
 /// cos γ − 1 as −2 sin²(γ/2): exact to rounding for small γ, where cos γ − 1 would cancel (and
 /// an exponent λ (cos γ − 1) of a sharp lobe magnify the cancellation).
 #[inline]
@@ -147,7 +160,8 @@ pub fn cos_minus_one(g: f32) -> f32 {
     -2.0 * s * s
 }
 
+/// The angle between two unit vectors, accurate near 0 and π.
 #[inline]
-fn angle(a: Vec3, b: Vec3) -> f32 {
+pub(crate) fn angle(a: Vec3, b: Vec3) -> f32 {
     a.cross(b).length().atan2(a.dot(b))
 }

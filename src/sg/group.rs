@@ -15,17 +15,18 @@
 //! monotone in these quantities. `group_bound_holds_for_every_sample` checks it on random
 //! groups.
 
+use super::bound::{angle, cos_max_bound, cos_minus_one, radiance_bound};
 use super::kernel::leaf::LeafSummary;
 use super::kernel::receivers::Receivers;
 use super::kernel::simd::{Isa, Kernel, Vf, dispatch};
 use super::kernel::{cluster, cluster::NodeSummary, leaf, receivers::ReceiversV};
-use super::lighting::{LitScene, SHARPNESS_BINS};
+use super::lighting::LitScene;
+use super::select::Pending;
 use super::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use crate::brdf::sg_fit::MAX_LOBES;
 use crate::math::luminance;
 use crate::settings::CutOptions;
 use glam::Vec3;
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 /// How many of a group's samples estimate its radiance during selection (spread evenly over
@@ -174,36 +175,12 @@ impl LitScene<'_> {
             }
             _ => None,
         };
-        let mut radiance = lit.diffuse;
-        for (edge, peak) in SHARPNESS_BINS.iter().zip(&lit.peak_by_sharpness) {
-            let f = match gap {
-                Some(g) => (edge * cos_minus_one(g)).min(0.0).exp(),
-                None => 1.0,
-            };
-            radiance += *peak * f;
-        }
-        let cos_max = match (cone, n.cone) {
-            (Some((dir, half)), Some(c)) => {
-                let g = angle(c.axis, dir);
-                let g = g.min(std::f32::consts::PI - g);
-                (g - c.half_angle - half).max(0.0).cos()
-            }
-            _ => 1.0,
-        };
+        let radiance = radiance_bound(lit, gap);
+        let cos_max = cos_max_bound(n.cone, cone);
         // 2e-3: the point bound's 1e-3 rounding headroom, and as much again for the f32
         // rounding of the enlarged cones' angles.
         radiance * hmax * (1.002 * cos_max / d2)
     }
-}
-
-#[inline]
-fn cos_minus_one(g: f32) -> f32 {
-    super::bound::cos_minus_one(g)
-}
-
-#[inline]
-fn angle(a: Vec3, b: Vec3) -> f32 {
-    a.cross(b).length().atan2(a.dot(b))
 }
 
 /// The per-node data the SIMD kernels read, built once per light and frame.
@@ -311,31 +288,11 @@ pub struct GroupCut {
     pub leaves: u64,
 }
 
-struct Pending {
-    key: f32,
-    node: u32,
+/// What the group selection keeps of a node in its heap: its group bound and the row of its
+/// values at the representatives in `SelectScratch::values`.
+struct Waiting {
     bound: Vec3,
-    /// Row of the node's values at the representatives in `values`.
     row: usize,
-}
-
-impl PartialEq for Pending {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Pending {}
-impl PartialOrd for Pending {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Pending {
-    fn cmp(&self, o: &Self) -> Ordering {
-        self.key
-            .total_cmp(&o.key)
-            .then_with(|| o.node.cmp(&self.node))
-    }
 }
 
 /// Scratch space of [`LitScene::select_group`], reused across groups.
@@ -387,20 +344,20 @@ impl LitScene<'_> {
         let mut heap = BinaryHeap::new();
         let mut size = 1usize;
         let mut settled: Vec<(u32, Vec3)> = Vec::new();
-        let mut push = |node: u32, bound: Vec3, row: usize, heap: &mut BinaryHeap<Pending>| {
-            let key = luminance(bound);
-            if key > 0.0 || key.is_nan() {
-                let key = if key.is_nan() { f32::INFINITY } else { key };
-                heap.push(Pending {
-                    key,
-                    node,
-                    bound,
-                    row,
-                });
-            } else {
-                settled.push((node, bound));
-            }
-        };
+        let mut push =
+            |node: u32, bound: Vec3, row: usize, heap: &mut BinaryHeap<Pending<Waiting>>| {
+                let key = luminance(bound);
+                if key > 0.0 || key.is_nan() {
+                    let key = if key.is_nan() { f32::INFINITY } else { key };
+                    heap.push(Pending {
+                        key,
+                        node,
+                        item: Waiting { bound, row },
+                    });
+                } else {
+                    settled.push((node, bound));
+                }
+            };
         push(0, root_bound, 0, &mut heap);
         let smallest = |est: &[Vec3]| {
             est.iter()
@@ -421,7 +378,7 @@ impl LitScene<'_> {
             let top = heap.pop().expect("peeked");
             let Some([l, r]) = self.tree.nodes[top.node as usize].children else {
                 // A leaf with a non-zero bound (none today: a leaf's value is exact).
-                push(top.node, Vec3::ZERO, top.row, &mut heap);
+                push(top.node, Vec3::ZERO, top.item.row, &mut heap);
                 continue;
             };
             let bounds = [self.group_bound(l, g), self.group_bound(r, g)];
@@ -434,14 +391,15 @@ impl LitScene<'_> {
             values.extend_from_slice(&scratch.pair);
             for j in 0..m {
                 let e = &mut scratch.estimate[j];
-                *e += values[row * m + j] + values[(row + 1) * m + j] - values[top.row * m + j];
+                *e +=
+                    values[row * m + j] + values[(row + 1) * m + j] - values[top.item.row * m + j];
             }
             floor = smallest(&scratch.estimate);
             push(l, bounds[0], row, &mut heap);
             push(r, bounds[1], row + 1, &mut heap);
             size += 1;
         }
-        settled.extend(heap.into_iter().map(|p| (p.node, p.bound)));
+        settled.extend(heap.into_iter().map(|p| (p.node, p.item.bound)));
         settled.sort_unstable_by_key(|e| e.0);
         out.nodes.extend(settled.iter().map(|e| e.0));
         out.bounds.extend(settled.iter().map(|e| e.1));

@@ -28,28 +28,31 @@ pub struct CutCounters {
     pub leaves: u64,
 }
 
-struct Pending {
-    key: f32,
-    entry: CutEntry,
+/// A node waiting in a selection's heap with its bound's luminance `key` and what the selection
+/// keeps of it (`item`).
+pub(super) struct Pending<T> {
+    pub(super) key: f32,
+    pub(super) node: u32,
+    pub(super) item: T,
 }
 
-impl PartialEq for Pending {
+impl<T> PartialEq for Pending<T> {
     fn eq(&self, o: &Self) -> bool {
         self.cmp(o) == Ordering::Equal
     }
 }
-impl Eq for Pending {}
-impl PartialOrd for Pending {
+impl<T> Eq for Pending<T> {}
+impl<T> PartialOrd for Pending<T> {
     fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
         Some(self.cmp(o))
     }
 }
-impl Ord for Pending {
+impl<T> Ord for Pending<T> {
     fn cmp(&self, o: &Self) -> Ordering {
         // Larger bound first; ties by node index, so selection is deterministic.
         self.key
             .total_cmp(&o.key)
-            .then_with(|| o.entry.node.cmp(&self.entry.node))
+            .then_with(|| o.node.cmp(&self.node))
     }
 }
 
@@ -89,23 +92,25 @@ impl LitScene<'_> {
         let mut size = 1usize;
         let root = self.entry(0, x, rx, c);
         let mut estimate = root.value;
-        let push = |e: CutEntry, heap: &mut BinaryHeap<Pending>, out: &mut Vec<CutEntry>| {
-            let key = luminance(e.bound);
-            if key > 0.0 || key.is_nan() {
-                heap.push(Pending {
-                    key: if key.is_nan() { f32::INFINITY } else { key },
-                    entry: e,
-                });
-            } else {
-                out.push(e);
-            }
-        };
+        let push =
+            |e: CutEntry, heap: &mut BinaryHeap<Pending<CutEntry>>, out: &mut Vec<CutEntry>| {
+                let key = luminance(e.bound);
+                if key > 0.0 || key.is_nan() {
+                    heap.push(Pending {
+                        key: if key.is_nan() { f32::INFINITY } else { key },
+                        node: e.node,
+                        item: e,
+                    });
+                } else {
+                    out.push(e);
+                }
+            };
         push(root, &mut heap, out);
         while let Some(top) = heap.peek() {
             if size >= cap || top.key <= opts.threshold * luminance(estimate).max(0.0) {
                 break;
             }
-            let top = heap.pop().expect("peeked").entry;
+            let top = heap.pop().expect("peeked").item;
             let Some([l, r]) = self.tree.nodes[top.node as usize].children else {
                 out.push(top);
                 continue;
@@ -118,7 +123,7 @@ impl LitScene<'_> {
             }
             size += 1;
         }
-        out.extend(heap.into_iter().map(|p| p.entry));
+        out.extend(heap.into_iter().map(|p| p.item));
         // Re-sum in a fixed order (node index) so the result does not depend on the heap's.
         out.sort_unstable_by_key(|e| e.node);
         out.iter().fold(Vec3::ZERO, |a, e| a + e.value)

@@ -629,7 +629,8 @@ fn shade_frame(
     let tile_indirect = if tiled {
         Some(ctx.tile_indirect(&hits, &tally, progress)?)
     } else {
-        if opts.mode == CutMode::Tile && !brute {
+        // The pass sg_work_units counts for tile cuts, done at once.
+        if opts.mode == CutMode::Tile {
             (progress.done)(opts.height as u64);
         }
         None
