@@ -286,6 +286,9 @@ pub struct GroupCut {
     /// Nodes whose bound was evaluated during selection, and of those leaves.
     pub evaluated: u64,
     pub leaves: u64,
+    /// The selection ended at the cap with nodes of infinite group bound still in the cut
+    /// (the group's ball meets their boxes): a smaller group would bound them.
+    pub unbounded: bool,
 }
 
 /// What the group selection keeps of a node in its heap: its group bound and the row of its
@@ -324,6 +327,7 @@ impl LitScene<'_> {
         out.bounds.clear();
         out.evaluated = 0;
         out.leaves = 0;
+        out.unbounded = false;
         if self.tree.nodes.is_empty() || reps.len == 0 {
             return;
         }
@@ -399,6 +403,7 @@ impl LitScene<'_> {
             push(r, bounds[1], row + 1, &mut heap);
             size += 1;
         }
+        out.unbounded = heap.peek().is_some_and(|p| p.key == f32::INFINITY);
         settled.extend(heap.into_iter().map(|p| (p.node, p.item.bound)));
         settled.sort_unstable_by_key(|e| e.0);
         out.nodes.extend(settled.iter().map(|e| e.0));

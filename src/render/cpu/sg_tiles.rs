@@ -31,6 +31,19 @@ pub const RAY_TAIL: f32 = 0.05;
 /// Samples per group at most (the tile's side shrinks with the samples per pixel).
 pub const GROUP_SAMPLES: usize = 64;
 
+/// Smallest group that is split in two when its cut ends at the cap with nodes of infinite
+/// group bound (`GroupCut::unbounded`), or the size `INTERREFLECT_SPLIT_MIN` asks for (a
+/// measurement knob, `docs/sg-performance.md`; 0 never splits).
+pub fn split_min() -> usize {
+    std::env::var("INTERREFLECT_SPLIT_MIN")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(SPLIT_MIN)
+}
+
+/// See [`split_min`]: groups of more than this many samples are split.
+pub const SPLIT_MIN: usize = 1;
+
 /// Tile side in pixels for `spp` samples per pixel: about [`GROUP_SAMPLES`] samples a tile,
 /// or the side the environment variable `INTERREFLECT_TILE_SIDE` asks for (a measurement knob:
 /// `docs/sg-performance.md` sweeps it).
@@ -74,6 +87,7 @@ impl Ctx<'_> {
         let spp = self.opts.spp as usize;
         let side = tile_side(self.opts.spp);
         let (tx, ty) = (w.div_ceil(side), h.div_ceil(side));
+        let split = split_min();
         let tiles: Vec<TileOut> = (0..tx * ty)
             .into_par_iter()
             .map_init(TileScratch::default, |scratch, t| {
@@ -86,6 +100,7 @@ impl Ctx<'_> {
                     &summaries,
                     hits,
                     (x0, y0, side, w, h, spp),
+                    split,
                     tally,
                     scratch,
                 );
@@ -114,6 +129,7 @@ impl Ctx<'_> {
         summaries: &[Summaries],
         hits: &[Option<Hit>],
         (x0, y0, side, w, h, spp): (usize, usize, usize, usize, usize, usize),
+        split: usize,
         tally: &Tally,
         scratch: &mut TileScratch,
     ) -> TileOut {
@@ -131,9 +147,9 @@ impl Ctx<'_> {
         // Groups: one material each, in a fixed order (material, then sample index).
         samples.sort_by_key(|s| (s.material, s.index));
         let mut out = Vec::with_capacity(samples.len());
-        for group in samples.chunk_by(|a, b| a.material == b.material) {
-            for chunk in group.chunks(GROUP_SAMPLES) {
-                self.shade_group(isa, summaries, chunk, tally, scratch, &mut out);
+        for group in samples.chunk_by_mut(|a, b| a.material == b.material) {
+            for chunk in group.chunks_mut(GROUP_SAMPLES) {
+                self.shade_group(isa, summaries, chunk, split, tally, scratch, &mut out);
             }
         }
         out
@@ -160,11 +176,16 @@ impl Ctx<'_> {
         })
     }
 
+    /// Selects the group's cuts and shades its samples; a group whose cut ends at the cap with
+    /// nodes of infinite bound and has more than `split` samples (`split` > 0) is split in two
+    /// halves along its positions' longest axis instead, and each half is shaded on its own.
+    #[allow(clippy::too_many_arguments)]
     fn shade_group(
         &self,
         isa: Isa,
         summaries: &[Summaries],
-        group: &[Sample],
+        group: &mut [Sample],
+        split: usize,
         tally: &Tally,
         sc: &mut TileScratch,
         out: &mut TileOut,
@@ -173,7 +194,7 @@ impl Ctx<'_> {
         let points: Vec<(Vec3, ReceiverLobes)> = group.iter().map(|s| (s.x, s.rx)).collect();
         let summary = GroupSummary::new(&points);
         sc.rec.clear();
-        for s in group {
+        for s in group.iter() {
             sc.rec.push(s.x, &s.rx, true);
         }
         sc.rec.pad();
@@ -187,8 +208,8 @@ impl Ctx<'_> {
         let mut radiance = vec![Vec3::ZERO; n];
         let mut size = 0usize;
         let mut rays = 0u64;
+        let mut shaded = 0u64;
         for (k, (lit, sums)) in self.lits.iter().zip(summaries).enumerate() {
-            tally.shading_points.fetch_add(n as u64, Ordering::Relaxed);
             lit.select_group(
                 isa,
                 sums,
@@ -198,6 +219,19 @@ impl Ctx<'_> {
                 &mut sc.select,
                 &mut sc.cut,
             );
+            if sc.cut.unbounded && split > 0 && n > split {
+                // The work so far is counted; the halves start again from the first light.
+                tally.add_counters(&CutCounters {
+                    evaluated: sc.cut.evaluated,
+                    leaves: sc.cut.leaves,
+                });
+                tally.rays.fetch_add(rays, Ordering::Relaxed);
+                let (a, b) = halve(group);
+                self.shade_group(isa, summaries, a, split, tally, sc, out);
+                self.shade_group(isa, summaries, b, split, tally, sc, out);
+                return;
+            }
+            shaded += n as u64;
             tally.add_cut(
                 sc.cut.nodes.len(),
                 &CutCounters {
@@ -239,6 +273,7 @@ impl Ctx<'_> {
             }
         }
         tally.rays.fetch_add(rays, Ordering::Relaxed);
+        tally.shading_points.fetch_add(shaded, Ordering::Relaxed);
         let size = size as f32;
         out.extend(group.iter().zip(radiance).map(|(s, v)| (s.index, v, size)));
     }
@@ -289,6 +324,19 @@ impl Ctx<'_> {
         let mean = if traced > 0.0 { seen / traced } else { 1.0 };
         (lit_sum + rest * mean, rays)
     }
+}
+
+/// The two halves of `group` along the longest axis of its positions' bounding box (ties by
+/// sample index, so the split is the same on every run).
+fn halve(group: &mut [Sample]) -> (&mut [Sample], &mut [Sample]) {
+    let (lo, hi) = group.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), s| (lo.min(s.x), hi.max(s.x)),
+    );
+    let axis = (hi - lo).max_position();
+    group.sort_unstable_by(|a, b| a.x[axis].total_cmp(&b.x[axis]).then(a.index.cmp(&b.index)));
+    let mid = group.len() / 2;
+    group.split_at_mut(mid)
 }
 
 /// A sample's radiance over a cut with the visibility maps of `--visibility approx`.
