@@ -35,10 +35,12 @@ pub const GROUP_SAMPLES: usize = 64;
 /// group bound (`GroupCut::unbounded`), or the size `INTERREFLECT_SPLIT_MIN` asks for (a
 /// measurement knob, `docs/sg-performance.md`; 0 never splits).
 pub fn split_min() -> usize {
-    std::env::var("INTERREFLECT_SPLIT_MIN")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .unwrap_or(SPLIT_MIN)
+    env_knob("INTERREFLECT_SPLIT_MIN").unwrap_or(SPLIT_MIN)
+}
+
+/// A measurement knob from the environment: the variable's value if it parses as a count.
+fn env_knob(name: &str) -> Option<usize> {
+    std::env::var(name).ok().and_then(|v| v.parse().ok())
 }
 
 /// See [`split_min`]: groups of more than this many samples are split.
@@ -48,15 +50,21 @@ pub const SPLIT_MIN: usize = 1;
 /// or the side the environment variable `INTERREFLECT_TILE_SIDE` asks for (a measurement knob:
 /// `docs/sg-performance.md` sweeps it).
 pub fn tile_side(spp: u32) -> usize {
-    if let Some(side) = std::env::var("INTERREFLECT_TILE_SIDE")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .filter(|&v| (1..=64).contains(&v))
-    {
+    if let Some(side) = env_knob("INTERREFLECT_TILE_SIDE").filter(|v| (1..=64).contains(v)) {
         return side;
     }
     let per_side = (spp as f64).sqrt().ceil() as usize;
     (8 / per_side.max(1)).max(1)
+}
+
+/// What every tile of a frame's pass shares.
+struct Pass<'p> {
+    isa: Isa,
+    /// Per light: its tree's node and leaf summaries for the kernel.
+    summaries: &'p [Summaries],
+    /// Groups of more than this many samples whose cut is unbounded are halved (0: never).
+    split: usize,
+    tally: &'p Tally,
 }
 
 /// One receiver sample of a tile.
@@ -81,13 +89,17 @@ impl Ctx<'_> {
         tally: &Tally,
         progress: &Progress,
     ) -> Option<(Vec<Vec3>, Vec<f32>)> {
-        let isa = Isa::detect();
         let summaries: Vec<Summaries> = self.lits.iter().map(Summaries::new).collect();
+        let pass = Pass {
+            isa: Isa::detect(),
+            summaries: &summaries,
+            split: split_min(),
+            tally,
+        };
         let (w, h) = (self.opts.width as usize, self.opts.height as usize);
         let spp = self.opts.spp as usize;
         let side = tile_side(self.opts.spp);
         let (tx, ty) = (w.div_ceil(side), h.div_ceil(side));
-        let split = split_min();
         let tiles: Vec<TileOut> = (0..tx * ty)
             .into_par_iter()
             .map_init(TileScratch::default, |scratch, t| {
@@ -95,15 +107,7 @@ impl Ctx<'_> {
                     return Vec::new();
                 }
                 let (x0, y0) = ((t % tx) * side, (t / tx) * side);
-                let out = self.shade_tile(
-                    isa,
-                    &summaries,
-                    hits,
-                    (x0, y0, side, w, h, spp),
-                    split,
-                    tally,
-                    scratch,
-                );
+                let out = self.shade_tile(&pass, hits, (x0, y0, side, w, h, spp), scratch);
                 if t % tx == tx - 1 {
                     (progress.done)(side.min(h - y0) as u64);
                 }
@@ -125,12 +129,9 @@ impl Ctx<'_> {
     /// The tile at pixel (x0, y0), `side` pixels wide, of a `w` × `h` image.
     fn shade_tile(
         &self,
-        isa: Isa,
-        summaries: &[Summaries],
+        pass: &Pass,
         hits: &[Option<Hit>],
         (x0, y0, side, w, h, spp): (usize, usize, usize, usize, usize, usize),
-        split: usize,
-        tally: &Tally,
         scratch: &mut TileScratch,
     ) -> TileOut {
         let mut samples = Vec::new();
@@ -149,7 +150,7 @@ impl Ctx<'_> {
         let mut out = Vec::with_capacity(samples.len());
         for group in samples.chunk_by_mut(|a, b| a.material == b.material) {
             for chunk in group.chunks_mut(GROUP_SAMPLES) {
-                self.shade_group(isa, summaries, chunk, split, tally, scratch, &mut out);
+                self.shade_group(pass, chunk, scratch, &mut out);
             }
         }
         out
@@ -179,17 +180,19 @@ impl Ctx<'_> {
     /// Selects the group's cuts and shades its samples; a group whose cut ends at the cap with
     /// nodes of infinite bound and has more than `split` samples (`split` > 0) is split in two
     /// halves along its positions' longest axis instead, and each half is shaded on its own.
-    #[allow(clippy::too_many_arguments)]
     fn shade_group(
         &self,
-        isa: Isa,
-        summaries: &[Summaries],
+        pass: &Pass,
         group: &mut [Sample],
-        split: usize,
-        tally: &Tally,
         sc: &mut TileScratch,
         out: &mut TileOut,
     ) {
+        let Pass {
+            isa,
+            summaries,
+            split,
+            tally,
+        } = *pass;
         let n = group.len();
         let points: Vec<(Vec3, ReceiverLobes)> = group.iter().map(|s| (s.x, s.rx)).collect();
         let summary = GroupSummary::new(&points);
@@ -227,8 +230,8 @@ impl Ctx<'_> {
                 });
                 tally.rays.fetch_add(rays, Ordering::Relaxed);
                 let (a, b) = halve(group);
-                self.shade_group(isa, summaries, a, split, tally, sc, out);
-                self.shade_group(isa, summaries, b, split, tally, sc, out);
+                self.shade_group(pass, a, sc, out);
+                self.shade_group(pass, b, sc, out);
                 return;
             }
             shaded += n as u64;
