@@ -5,8 +5,11 @@
 #
 #   scripts/sg-performance.sh [BASELINE_BINARY]
 #
-# CUT (environment, default "tile") is this build's --cut. BASELINE_BINARY defaults to a release build of commit 8bf32a1 made in a git worktree under
-# target/baseline-8bf32a1 (several minutes the first time). Work files go to target/sg-performance/.
+# CUT (environment, default "tile") is this build's --cut. BASELINE_BINARY defaults to a release
+# build of commit 8bf32a1 made in a git worktree under target/baseline-8bf32a1 (several minutes
+# the first time). NEW_BINARY (environment) is this build's binary; without it the script runs
+# `cargo build --release` and uses target/release/interreflect. Work files (and the cached
+# references) go to target/sg-performance/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BASE_COMMIT=8bf32a1
@@ -22,8 +25,12 @@ else
   fi
   BASE="$TREE/target/release/interreflect"
 fi
-cargo build --release
-NEW=target/release/interreflect
+if [ -n "${NEW_BINARY:-}" ]; then
+  NEW="$NEW_BINARY"
+else
+  cargo build --release
+  NEW=target/release/interreflect
+fi
 ARGS=(--method sg --indirect-only --width 256 --height 192 --spp 1 --quiet)
 secs() { python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["seconds"]["render"])' "$1"; }
 err() { "$NEW" compare --json "$1" "$2" | python3 -c 'import json,sys; print(json.load(sys.stdin)["rel_rmse"])'; }
@@ -58,5 +65,13 @@ for row in sys.argv[3:]:
     s, v, tb, tn, eb, en = row.split()
     tb, tn, eb, en = map(float, (tb, tn, eb, en))
     print(f"| {s} | {v} | {tb:.2f} | {tn:.2f} | {tb / tn:.1f}× | {100 * eb:.2f} % | {100 * en:.2f} % | {100 * (en - eb):+.2f} |")
+rows = [r.split() for r in sys.argv[3:]]
+fast = [r for r in rows if float(r[2]) / float(r[3]) >= 30]
+close = [r for r in rows if float(r[5]) - float(r[4]) <= 0.005]
+print()
+print(f"The frame bar (issue 26) asks for at least 30× with at most +0.5 pp on every row: {len(fast)} of"
+      f" {len(rows)} rows are 30× faster and {len(close)} of {len(rows)} are within +0.5 pp, so the bar is"
+      f" {'met' if len(fast) == len(close) == len(rows) else '**not met**'}. Where the time goes and"
+      " what is next: `docs/sg-performance.md`.")
 PY
 cat results/sg-performance.md

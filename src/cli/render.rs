@@ -624,12 +624,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         gpu_ism_fallback(&args, &stats.ism_on)?;
         let s = &stats;
         log(format!(
-            "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
+            "sg: {} reflector triangles ({} pieces), {} tree nodes; cut size mean {:.1}, max {}, {} of {} cuts ended at the cap; {:.1} nodes and {:.1} triangle integrations per pixel; {} visibility rays",
             s.reflector_triangles,
             s.reflector_pieces,
             s.tree_nodes,
             s.cut_size_mean,
             s.cut_size_max,
+            s.cuts_at_cap,
+            s.cuts,
             s.nodes_evaluated_per_pixel,
             s.leaves_evaluated_per_pixel,
             s.visibility_rays

@@ -289,6 +289,10 @@ pub struct GroupCut {
     /// The selection ended at the cap with nodes of infinite group bound still in the cut
     /// (the group's ball meets their boxes): a smaller group would bound them.
     pub unbounded: bool,
+    /// Node `k`'s value at representative `j` (`rep_values[k * m + j]`, `m` representatives),
+    /// as [`evaluate_nodes`] gives it: the selection evaluated every node of the cut there, so
+    /// shading need not evaluate the representatives again.
+    pub rep_values: Vec<Vec3>,
 }
 
 /// What the group selection keeps of a node in its heap: its group bound and the row of its
@@ -328,6 +332,7 @@ impl LitScene<'_> {
         out.evaluated = 0;
         out.leaves = 0;
         out.unbounded = false;
+        out.rep_values.clear();
         if self.tree.nodes.is_empty() || reps.len == 0 {
             return;
         }
@@ -347,7 +352,7 @@ impl LitScene<'_> {
         out.evaluated += 1;
         let mut heap = BinaryHeap::new();
         let mut size = 1usize;
-        let mut settled: Vec<(u32, Vec3)> = Vec::new();
+        let mut settled: Vec<(u32, Vec3, usize)> = Vec::new();
         let mut push =
             |node: u32, bound: Vec3, row: usize, heap: &mut BinaryHeap<Pending<Waiting>>| {
                 let key = luminance(bound);
@@ -359,7 +364,7 @@ impl LitScene<'_> {
                         item: Waiting { bound, row },
                     });
                 } else {
-                    settled.push((node, bound));
+                    settled.push((node, bound, row));
                 }
             };
         push(0, root_bound, 0, &mut heap);
@@ -404,10 +409,14 @@ impl LitScene<'_> {
             size += 1;
         }
         out.unbounded = heap.peek().is_some_and(|p| p.key == f32::INFINITY);
-        settled.extend(heap.into_iter().map(|p| (p.node, p.item.bound)));
+        settled.extend(heap.into_iter().map(|p| (p.node, p.item.bound, p.item.row)));
         settled.sort_unstable_by_key(|e| e.0);
         out.nodes.extend(settled.iter().map(|e| e.0));
         out.bounds.extend(settled.iter().map(|e| e.1));
+        for &(_, _, row) in &settled {
+            out.rep_values
+                .extend_from_slice(&values[row * m..(row + 1) * m]);
+        }
     }
 }
 
@@ -438,6 +447,60 @@ mod tests {
                 (x, ReceiverLobes::new(&mats[m], n, wo))
             })
             .collect()
+    }
+
+    /// The representatives' values the selection hands to shading (`GroupCut::rep_values`) are
+    /// exactly what evaluating the selected cut at them gives, node for node, with every ISA
+    /// (no tolerance: the same lanes run the same arithmetic), and the cut's nodes are distinct
+    /// tree nodes. Shading reuses them instead of evaluating the representatives again.
+    #[test]
+    fn selection_hands_over_the_representatives_values() {
+        let mut checked = 0;
+        for seed in 0..12u64 {
+            let cfg = config(seed, 30, seed % 2 == 0);
+            let lit = LitScene::new(
+                &cfg.tree,
+                cfg.tris.clone(),
+                cfg.light,
+                ReceiverOptions::default(),
+            );
+            let s = Summaries::new(&lit);
+            let mut rng = Rng::keyed(seed, 41, 7);
+            for m in 0..4 {
+                let pts: Vec<_> = group(&mut rng, m, 20, 0.1)
+                    .into_iter()
+                    .filter(|p| !p.1.is_black())
+                    .collect();
+                if pts.is_empty() {
+                    continue;
+                }
+                let g = GroupSummary::new(&pts);
+                let mut reps = Receivers::default();
+                for (x, rx) in pts.iter().take(REPRESENTATIVES) {
+                    reps.push(*x, rx, true);
+                }
+                reps.pad();
+                for isa in Isa::all_available() {
+                    for max_cut in [4, 1000] {
+                        let opts = CutOptions {
+                            threshold: 0.01,
+                            max_cut,
+                        };
+                        let mut cut = GroupCut::default();
+                        let mut scratch = SelectScratch::default();
+                        lit.select_group(isa, &s, &g, &reps, &opts, &mut scratch, &mut cut);
+                        assert!(cut.nodes.windows(2).all(|w| w[0] < w[1]));
+                        let mut direct = Vec::new();
+                        evaluate_nodes(isa, &lit, &s, &cut.nodes, &cut.bounds, &reps, &mut direct);
+                        assert_eq!(cut.rep_values.len(), cut.nodes.len() * reps.len);
+                        assert_eq!(cut.rep_values, direct, "seed {seed} m {m} {isa:?}");
+                        checked += usize::from(direct.iter().any(|v| *v != Vec3::ZERO));
+                    }
+                }
+            }
+        }
+        // Some cuts must carry light, or the comparison above proves nothing.
+        assert!(checked > 10, "only {checked} cuts with non-zero values");
     }
 
     proptest! {

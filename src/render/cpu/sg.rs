@@ -122,6 +122,12 @@ pub struct SgStats {
     pub cuts: u64,
     pub cut_size_mean: f64,
     pub cut_size_max: u64,
+    /// Cuts by size: entry i counts the cuts of 2^i to 2^(i+1) − 1 nodes (entry 0 also the
+    /// empty ones), up to the largest entry used.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cut_size_histogram: Vec<u64>,
+    /// Cuts that ended at the `max_cut` cap rather than at the error threshold.
+    pub cuts_at_cap: u64,
     /// Nodes whose bound and approximation were evaluated, per pixel (all samples and lights,
     /// including vertex cuts shared out over the pixels).
     pub nodes_evaluated_per_pixel: f64,
@@ -143,12 +149,19 @@ pub struct SgStats {
     pub pixel_cut_sizes: Vec<f32>,
 }
 
+/// Entries of `SgStats::cut_size_histogram` at most (the last holds every larger cut).
+const CUT_SIZE_BUCKETS: usize = 24;
+
 #[derive(Default)]
 pub(super) struct Tally {
     pub(super) shading_points: AtomicU64,
     cuts: AtomicU64,
     cut_size_sum: AtomicU64,
     cut_size_max: AtomicU64,
+    cut_size_histogram: [AtomicU64; CUT_SIZE_BUCKETS],
+    cuts_at_cap: AtomicU64,
+    /// The cut's size cap (`CutOptions::max_cut`; 0: none), for `cuts_at_cap`.
+    pub(super) cap: u64,
     evaluated: AtomicU64,
     leaves: AtomicU64,
     pub(super) rays: AtomicU64,
@@ -167,7 +180,24 @@ impl Tally {
         self.cuts.fetch_add(1, Ordering::Relaxed);
         self.cut_size_sum.fetch_add(size as u64, Ordering::Relaxed);
         self.cut_size_max.fetch_max(size as u64, Ordering::Relaxed);
+        let bucket = (usize::BITS - size.max(1).leading_zeros() - 1) as usize;
+        self.cut_size_histogram[bucket.min(CUT_SIZE_BUCKETS - 1)].fetch_add(1, Ordering::Relaxed);
+        if self.cap > 0 && size as u64 >= self.cap {
+            self.cuts_at_cap.fetch_add(1, Ordering::Relaxed);
+        }
         self.add_counters(c);
+    }
+    /// The histogram of cut sizes, trimmed after its last non-empty entry.
+    fn cut_size_histogram(&self) -> Vec<u64> {
+        let mut h: Vec<u64> = self
+            .cut_size_histogram
+            .iter()
+            .map(|c| c.load(Ordering::Relaxed))
+            .collect();
+        while h.last() == Some(&0) {
+            h.pop();
+        }
+        h
     }
     pub(super) fn add_counters(&self, c: &CutCounters) {
         self.evaluated.fetch_add(c.evaluated, Ordering::Relaxed);
@@ -544,7 +574,10 @@ fn shade_frame(
         return None;
     }
 
-    let tally = Tally::default();
+    let tally = Tally {
+        cap: u64::from(opts.cut.max_cut),
+        ..Tally::default()
+    };
     let ctx = Ctx {
         scene,
         accel,
@@ -688,11 +721,13 @@ fn shade_frame(
     if progress.cancel.load(Ordering::Relaxed) {
         return None;
     }
+    stats.cut_size_histogram = tally.cut_size_histogram();
     let cuts = tally.cuts.into_inner();
     stats.shading_points = tally.shading_points.into_inner();
     stats.cuts = cuts;
     stats.cut_size_mean = tally.cut_size_sum.into_inner() as f64 / cuts.max(1) as f64;
     stats.cut_size_max = tally.cut_size_max.into_inner();
+    stats.cuts_at_cap = tally.cuts_at_cap.into_inner();
     stats.nodes_evaluated_per_pixel = tally.evaluated.into_inner() as f64 / n_px as f64;
     stats.leaves_evaluated_per_pixel = tally.leaves.into_inner() as f64 / n_px as f64;
     stats.visibility_rays = tally.rays.into_inner();

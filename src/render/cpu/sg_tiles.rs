@@ -196,18 +196,27 @@ impl Ctx<'_> {
         let n = group.len();
         let points: Vec<(Vec3, ReceiverLobes)> = group.iter().map(|s| (s.x, s.rx)).collect();
         let summary = GroupSummary::new(&points);
-        sc.rec.clear();
-        for s in group.iter() {
-            sc.rec.push(s.x, &s.rx, true);
-        }
-        sc.rec.pad();
-        sc.reps.clear();
+        // The representatives estimate during selection; the selection's values at them are
+        // reused, so shading evaluates the cut at the others (`rest`) only. `source[j]` is
+        // sample j's column: `Ok(r)` representative r, `Err(i)` rest sample i.
         let m = n.min(REPRESENTATIVES);
-        for j in 0..m {
-            let s = &group[j * n / m];
-            sc.reps.push(s.x, &s.rx, true);
+        sc.reps.clear();
+        sc.rec.clear();
+        sc.source.clear();
+        let mut next_rep = 0;
+        for (j, s) in group.iter().enumerate() {
+            if next_rep < m && j == next_rep * n / m {
+                sc.source.push(Ok(next_rep));
+                sc.reps.push(s.x, &s.rx, true);
+                next_rep += 1;
+            } else {
+                sc.source.push(Err(sc.rec.len));
+                sc.rec.push(s.x, &s.rx, true);
+            }
         }
         sc.reps.pad();
+        sc.rec.pad();
+        let rest = sc.rec.len;
         let mut radiance = vec![Vec3::ZERO; n];
         let mut size = 0usize;
         let mut rays = 0u64;
@@ -244,26 +253,33 @@ impl Ctx<'_> {
             );
             size += sc.cut.nodes.len();
             let cut = &sc.cut;
-            evaluate_nodes(
-                isa,
-                lit,
-                sums,
-                &cut.nodes,
-                &cut.bounds,
-                &sc.rec,
-                &mut sc.values,
-            );
+            sc.values.clear();
+            if rest > 0 {
+                evaluate_nodes(
+                    isa,
+                    lit,
+                    sums,
+                    &cut.nodes,
+                    &cut.bounds,
+                    &sc.rec,
+                    &mut sc.values,
+                );
+            }
             let leaves = cut
                 .nodes
                 .iter()
                 .filter(|&&v| lit.tree.nodes[v as usize].is_leaf())
                 .count();
             tally.add_counters(&CutCounters {
-                evaluated: (cut.nodes.len() * n) as u64,
-                leaves: (leaves * n) as u64,
+                evaluated: (cut.nodes.len() * rest) as u64,
+                leaves: (leaves * rest) as u64,
             });
+            let (values, rep_values) = (&sc.values, &cut.rep_values);
             for (j, s) in group.iter().enumerate() {
-                let value = |i: usize| sc.values[i * n + j];
+                let value = |i: usize| match sc.source[j] {
+                    Ok(r) => rep_values[i * m + r],
+                    Err(q) => values[i * rest + q],
+                };
                 radiance[j] += match self.vpl_vis(k) {
                     Some(vv) => approx_visible(vv, &cut.nodes, value, s.xo),
                     None => {
@@ -367,5 +383,7 @@ struct TileScratch {
     select: SelectScratch,
     cut: GroupCut,
     values: Vec<Vec3>,
+    /// Per sample of the group: its representative's or its rest column (see `shade_group`).
+    source: Vec<Result<usize, usize>>,
     order: Vec<(f32, u32)>,
 }

@@ -128,9 +128,13 @@ fn cosine_weighted<V: Vf>(axis: V3<V>, lam: V, n: V3<V>, a: V3<V>, b: V3<V>, c: 
     let var = (V::splat(1.0) - np * np).max(zero) * lam.max(V::splat(1e-6)).recip();
     let above = np.gt(zero) & (np * np).ge(V::splat(9.0) * var);
     let mut out = zero;
-    let r = triangle::integrate(axis, lam, a, b, c);
-    let mut fallback = r.fallback & above;
-    out = V::select(above, r.value * np, out);
+    let mut fallback = zero.gt(zero); // no lane
+    // Each form only where some lane takes it (a lane's value does not depend on the others').
+    if V::any(above) {
+        let r = triangle::integrate(axis, lam, a, b, c);
+        fallback = r.fallback & above;
+        out = V::select(above, r.value * np, out);
+    }
     if !V::all(above) {
         let v = axis.scale(lam);
         let h = V::splat(0.1) * lam.max(V::splat(1.0)).sqrt();
