@@ -180,7 +180,7 @@ impl Tally {
         self.cuts.fetch_add(1, Ordering::Relaxed);
         self.cut_size_sum.fetch_add(size as u64, Ordering::Relaxed);
         self.cut_size_max.fetch_max(size as u64, Ordering::Relaxed);
-        let bucket = (usize::BITS - size.max(1).leading_zeros() - 1) as usize;
+        let bucket = size.max(1).ilog2() as usize;
         self.cut_size_histogram[bucket.min(CUT_SIZE_BUCKETS - 1)].fetch_add(1, Ordering::Relaxed);
         if self.cap > 0 && size as u64 >= self.cap {
             self.cuts_at_cap.fetch_add(1, Ordering::Relaxed);

@@ -197,8 +197,7 @@ impl Ctx<'_> {
         let points: Vec<(Vec3, ReceiverLobes)> = group.iter().map(|s| (s.x, s.rx)).collect();
         let summary = GroupSummary::new(&points);
         // The representatives estimate during selection; the selection's values at them are
-        // reused, so shading evaluates the cut at the others (`rest`) only. `source[j]` is
-        // sample j's column: `Ok(r)` representative r, `Err(i)` rest sample i.
+        // reused, so shading evaluates the cut at the others (`rest`) only.
         let m = n.min(REPRESENTATIVES);
         sc.reps.clear();
         sc.rec.clear();
@@ -206,11 +205,11 @@ impl Ctx<'_> {
         let mut next_rep = 0;
         for (j, s) in group.iter().enumerate() {
             if next_rep < m && j == next_rep * n / m {
-                sc.source.push(Ok(next_rep));
+                sc.source.push(Column::Rep(next_rep));
                 sc.reps.push(s.x, &s.rx, true);
                 next_rep += 1;
             } else {
-                sc.source.push(Err(sc.rec.len));
+                sc.source.push(Column::Rest(sc.rec.len));
                 sc.rec.push(s.x, &s.rx, true);
             }
         }
@@ -277,8 +276,8 @@ impl Ctx<'_> {
             let (values, rep_values) = (&sc.values, &cut.rep_values);
             for (j, s) in group.iter().enumerate() {
                 let value = |i: usize| match sc.source[j] {
-                    Ok(r) => rep_values[i * m + r],
-                    Err(q) => values[i * rest + q],
+                    Column::Rep(r) => rep_values[i * m + r],
+                    Column::Rest(q) => values[i * rest + q],
                 };
                 radiance[j] += match self.vpl_vis(k) {
                     Some(vv) => approx_visible(vv, &cut.nodes, value, s.xo),
@@ -375,6 +374,14 @@ fn approx_visible(
     l
 }
 
+/// Where a sample's values over the cut are: the selection's column of representative r
+/// (`GroupCut::rep_values`), or shading's column q of the other samples.
+#[derive(Clone, Copy)]
+enum Column {
+    Rep(usize),
+    Rest(usize),
+}
+
 /// Per-thread buffers of the tile pass.
 #[derive(Default)]
 struct TileScratch {
@@ -383,7 +390,7 @@ struct TileScratch {
     select: SelectScratch,
     cut: GroupCut,
     values: Vec<Vec3>,
-    /// Per sample of the group: its representative's or its rest column (see `shade_group`).
-    source: Vec<Result<usize, usize>>,
+    /// Per sample of the group: where its values are (see `shade_group`).
+    source: Vec<Column>,
     order: Vec<(f32, u32)>,
 }

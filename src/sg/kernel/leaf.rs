@@ -106,20 +106,21 @@ fn projected_solid_angle<V: Vf>(a: V3<V>, b: V3<V>, c: V3<V>, n: V3<V>) -> V {
 
 /// e^{|w| − λ} ∫_T exp(w·ω − |w|) dω = e^{−λ} J(w), the smooth SG integral of `cosine_weighted`.
 #[inline(always)]
-fn scaled_integral<V: Vf>(w: V3<V>, lam: V, a: V3<V>, b: V3<V>, c: V3<V>) -> (V, V::M) {
+fn scaled_integral<V: Vf>(w: V3<V>, lam: V, a: V3<V>, b: V3<V>, c: V3<V>) -> V {
     let zero = V::splat(0.0);
     let l2 = w.length_squared();
     let pos = l2.gt(zero);
     let inv = l2.max(V::splat(1e-30)).rsqrt();
     let len = l2 * inv;
     let dir = V3::select(pos, w.scale(inv), V3::splat(Vec3::Z));
-    let i = triangle::integrate(dir, V::select(pos, len, zero), a, b, c);
-    (i.value * exp(len - lam), i.fallback)
+    triangle::integrate(dir, V::select(pos, len, zero), a, b, c).value * exp(len - lam)
 }
 
 /// ∫_T exp(λ(p·ω − 1)) (n·ω) dω for the unit-amplitude lobe (`cosine_weighted`): the cosine at
 /// the axis where the lobe is well above the horizon (n·p ≥ 3σ), else the central difference
-/// of the SG integral along n.
+/// of the SG integral along n. Each form runs only when some lane takes it. The kernel's rare
+/// fallback lanes (a wide lobe over a triangle wider than 1.5 rad reaching past 90°) keep their
+/// kernel value here; `shade_exact` recomputes them.
 #[inline(always)]
 fn cosine_weighted<V: Vf>(axis: V3<V>, lam: V, n: V3<V>, a: V3<V>, b: V3<V>, c: V3<V>) -> V {
     let zero = V::splat(0.0);
@@ -128,25 +129,21 @@ fn cosine_weighted<V: Vf>(axis: V3<V>, lam: V, n: V3<V>, a: V3<V>, b: V3<V>, c: 
     let var = (V::splat(1.0) - np * np).max(zero) * lam.max(V::splat(1e-6)).recip();
     let above = np.gt(zero) & (np * np).ge(V::splat(9.0) * var);
     let mut out = zero;
-    let mut fallback = zero.gt(zero); // no lane
-    // Each form only where some lane takes it (a lane's value does not depend on the others').
     if V::any(above) {
-        let r = triangle::integrate(axis, lam, a, b, c);
-        fallback = r.fallback & above;
-        out = V::select(above, r.value * np, out);
+        out = V::select(
+            above,
+            triangle::integrate(axis, lam, a, b, c).value * np,
+            out,
+        );
     }
     if !V::all(above) {
         let v = axis.scale(lam);
         let h = V::splat(0.1) * lam.max(V::splat(1.0)).sqrt();
-        let (up, fu) = scaled_integral(v + n.scale(h), lam, a, b, c);
-        let (dn, fd) = scaled_integral(v - n.scale(h), lam, a, b, c);
+        let up = scaled_integral(v + n.scale(h), lam, a, b, c);
+        let dn = scaled_integral(v - n.scale(h), lam, a, b, c);
         let d = ((up - dn) * (V::splat(2.0) * h).recip()).max(zero);
         out = V::select(above, out, d);
-        fallback = fallback | ((fu | fd) & !above);
     }
-    // The kernel's rare fallback lanes (a wide lobe over a triangle wider than 1.5 rad reaching
-    // past 90°) are left at their kernel value here; `shade_exact` recomputes them.
-    let _ = fallback;
     out
 }
 
