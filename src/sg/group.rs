@@ -283,9 +283,13 @@ impl Kernel for EvalNodes<'_, '_> {
 pub struct GroupCut {
     pub nodes: Vec<u32>,
     pub bounds: Vec<Vec3>,
-    /// Nodes whose bound was evaluated during selection, and of those leaves.
+    /// Node evaluations at the representatives during selection, one per node and
+    /// representative (each check of the stopping rule evaluates the whole cut there), and of
+    /// those leaves'.
     pub evaluated: u64,
     pub leaves: u64,
+    /// Checks of the stopping rule against a freshly evaluated estimate.
+    pub checks: u32,
     /// The selection ended at the cap with nodes of infinite group bound still in the cut
     /// (the group's ball meets their boxes): a smaller group would bound them.
     pub unbounded: bool,
@@ -295,19 +299,20 @@ pub struct GroupCut {
     pub rep_values: Vec<Vec3>,
 }
 
-/// What the group selection keeps of a node in its heap: its group bound and the row of its
-/// values at the representatives in `SelectScratch::values`.
-struct Waiting {
-    bound: Vec3,
-    row: usize,
-}
-
 /// Scratch space of [`LitScene::select_group`], reused across groups.
 #[derive(Default)]
 pub struct SelectScratch {
-    values: Vec<Vec3>,
-    pair: Vec<Vec3>,
+    settled: Vec<(u32, Vec3)>,
+    cut: Vec<(u32, Vec3)>,
     estimate: Vec<Vec3>,
+}
+
+/// The smallest positive luminance among the representatives' estimates (∞ when none is).
+fn smallest(est: &[Vec3]) -> f32 {
+    est.iter()
+        .map(|e| luminance(*e))
+        .filter(|&l| l > 0.0)
+        .fold(f32::INFINITY, f32::min)
 }
 
 impl LitScene<'_> {
@@ -316,6 +321,16 @@ impl LitScene<'_> {
     /// bound is at most `threshold` × the smallest positive estimate among the representatives
     /// `reps` (their radiance under the current cut, evaluated on the SIMD lanes) or the cut
     /// holds `max_cut` nodes.
+    ///
+    /// The order of refinement depends on the bounds alone, so the representatives' values are
+    /// needed only to test the stopping rule. They are not evaluated for every node the
+    /// selection creates (half of which it refines away again) but for the whole cut when the
+    /// rule, tested against the last evaluated estimate, says stop (and at the cap): if the
+    /// fresh estimate agrees the selection ends, else it goes on with the fresh estimate, and
+    /// checks again no sooner than at 1.5× the size (so all checks together cost at most three
+    /// evaluations of the final cut; at the cap, where almost every cut ends, one). A cut can
+    /// therefore end later than the eager rule would end it, never earlier, and where both end
+    /// at the cap they are the same cut with the same values.
     #[allow(clippy::too_many_arguments)]
     pub fn select_group(
         &self,
@@ -331,6 +346,7 @@ impl LitScene<'_> {
         out.bounds.clear();
         out.evaluated = 0;
         out.leaves = 0;
+        out.checks = 0;
         out.unbounded = false;
         out.rep_values.clear();
         if self.tree.nodes.is_empty() || reps.len == 0 {
@@ -342,80 +358,98 @@ impl LitScene<'_> {
             opts.max_cut as usize
         };
         let m = reps.len;
-        let values = &mut scratch.values;
-        values.clear();
-        let root_bound = self.group_bound(0, g);
-        evaluate_nodes(isa, self, s, &[0], &[root_bound], reps, &mut scratch.pair);
-        values.extend_from_slice(&scratch.pair);
-        scratch.estimate.clear();
-        scratch.estimate.extend_from_slice(&scratch.pair);
-        out.evaluated += 1;
-        let mut heap = BinaryHeap::new();
-        let mut size = 1usize;
-        let mut settled: Vec<(u32, Vec3, usize)> = Vec::new();
-        let mut push =
-            |node: u32, bound: Vec3, row: usize, heap: &mut BinaryHeap<Pending<Waiting>>| {
-                let key = luminance(bound);
-                if key > 0.0 || key.is_nan() {
-                    let key = if key.is_nan() { f32::INFINITY } else { key };
-                    heap.push(Pending {
-                        key,
-                        node,
-                        item: Waiting { bound, row },
-                    });
-                } else {
-                    settled.push((node, bound, row));
-                }
-            };
-        push(0, root_bound, 0, &mut heap);
-        let smallest = |est: &[Vec3]| {
-            est.iter()
-                .map(|e| luminance(*e))
-                .filter(|&l| l > 0.0)
-                .fold(f32::INFINITY, f32::min)
-        };
-        let mut floor = smallest(&scratch.estimate);
-        while let Some(top) = heap.peek() {
-            let limit = if floor.is_finite() {
+        let limit = |floor: f32| {
+            if floor.is_finite() {
                 opts.threshold * floor
             } else {
                 0.0
-            };
-            if size >= cap || top.key <= limit {
-                break;
             }
-            let top = heap.pop().expect("peeked");
+        };
+        let mut heap: BinaryHeap<Pending<Vec3>> = BinaryHeap::new();
+        let settled = &mut scratch.settled;
+        settled.clear();
+        let push = |node: u32,
+                    bound: Vec3,
+                    heap: &mut BinaryHeap<Pending<Vec3>>,
+                    settled: &mut Vec<(u32, Vec3)>| {
+            let key = luminance(bound);
+            if key > 0.0 || key.is_nan() {
+                let key = if key.is_nan() { f32::INFINITY } else { key };
+                heap.push(Pending {
+                    key,
+                    node,
+                    item: bound,
+                });
+            } else {
+                settled.push((node, bound));
+            }
+        };
+        push(0, self.group_bound(0, g), &mut heap, settled);
+        let mut size = 1usize;
+        // The estimate's floor at the last check (none yet), and the size from which the next
+        // check may run.
+        let mut floor: Option<f32> = None;
+        let mut next_check = 1usize;
+        loop {
+            let top = heap.peek().map(|p| p.key);
+            let forced = size >= cap || top.is_none();
+            let says_stop = match (floor, top) {
+                (Some(f), Some(k)) => k <= limit(f),
+                _ => true,
+            };
+            if forced || (says_stop && size >= next_check) {
+                let cut = &mut scratch.cut;
+                cut.clear();
+                cut.extend_from_slice(settled);
+                cut.extend(heap.iter().map(|p| (p.node, p.item)));
+                cut.sort_unstable_by_key(|e| e.0);
+                out.nodes.clear();
+                out.bounds.clear();
+                out.nodes.extend(cut.iter().map(|e| e.0));
+                out.bounds.extend(cut.iter().map(|e| e.1));
+                evaluate_nodes(
+                    isa,
+                    self,
+                    s,
+                    &out.nodes,
+                    &out.bounds,
+                    reps,
+                    &mut out.rep_values,
+                );
+                out.checks += 1;
+                let leaves = out
+                    .nodes
+                    .iter()
+                    .filter(|&&v| self.tree.nodes[v as usize].is_leaf())
+                    .count();
+                out.evaluated += (out.nodes.len() * m) as u64;
+                out.leaves += (leaves * m) as u64;
+                let est = &mut scratch.estimate;
+                est.clear();
+                est.resize(m, Vec3::ZERO);
+                for row in out.rep_values.chunks_exact(m) {
+                    for (e, v) in est.iter_mut().zip(row) {
+                        *e += *v;
+                    }
+                }
+                let fresh = smallest(est);
+                if forced || top.is_some_and(|k| k <= limit(fresh)) {
+                    out.unbounded = top == Some(f32::INFINITY);
+                    return;
+                }
+                floor = Some(fresh);
+                next_check = size + size.div_ceil(2);
+            }
+            let top = heap.pop().expect("not forced: the heap holds a node");
             let Some([l, r]) = self.tree.nodes[top.node as usize].children else {
                 // A leaf with a non-zero bound (none today: a leaf's value is exact).
-                push(top.node, Vec3::ZERO, top.item.row, &mut heap);
+                settled.push((top.node, Vec3::ZERO));
                 continue;
             };
-            let bounds = [self.group_bound(l, g), self.group_bound(r, g)];
-            evaluate_nodes(isa, self, s, &[l, r], &bounds, reps, &mut scratch.pair);
-            out.evaluated += 2;
             for c in [l, r] {
-                out.leaves += u64::from(self.tree.nodes[c as usize].is_leaf());
+                push(c, self.group_bound(c, g), &mut heap, settled);
             }
-            let row = values.len() / m;
-            values.extend_from_slice(&scratch.pair);
-            for j in 0..m {
-                let e = &mut scratch.estimate[j];
-                *e +=
-                    values[row * m + j] + values[(row + 1) * m + j] - values[top.item.row * m + j];
-            }
-            floor = smallest(&scratch.estimate);
-            push(l, bounds[0], row, &mut heap);
-            push(r, bounds[1], row + 1, &mut heap);
             size += 1;
-        }
-        out.unbounded = heap.peek().is_some_and(|p| p.key == f32::INFINITY);
-        settled.extend(heap.into_iter().map(|p| (p.node, p.item.bound, p.item.row)));
-        settled.sort_unstable_by_key(|e| e.0);
-        out.nodes.extend(settled.iter().map(|e| e.0));
-        out.bounds.extend(settled.iter().map(|e| e.1));
-        for &(_, _, row) in &settled {
-            out.rep_values
-                .extend_from_slice(&values[row * m..(row + 1) * m]);
         }
     }
 }
@@ -501,6 +535,161 @@ mod tests {
         }
         // Some cuts must carry light, or the comparison above proves nothing.
         assert!(checked > 10, "only {checked} cuts with non-zero values");
+    }
+
+    /// The cut after `steps` refinements by the group bound alone (the order `select_group`
+    /// follows): its nodes (ascending) with their bounds, and the largest key left to refine.
+    fn refined(lit: &LitScene, g: &GroupSummary, steps: usize) -> (Vec<(u32, Vec3)>, Option<f32>) {
+        let mut heap = BinaryHeap::new();
+        let mut cut = Vec::new();
+        let add = |node: u32, heap: &mut BinaryHeap<Pending<Vec3>>, cut: &mut Vec<(u32, Vec3)>| {
+            let b = lit.group_bound(node, g);
+            let key = luminance(b);
+            if key > 0.0 || key.is_nan() {
+                let key = if key.is_nan() { f32::INFINITY } else { key };
+                heap.push(Pending { key, node, item: b });
+            } else {
+                cut.push((node, b));
+            }
+        };
+        add(0, &mut heap, &mut cut);
+        for _ in 0..steps {
+            let Some(top) = heap.pop() else { break };
+            let [l, r] = lit.tree.nodes[top.node as usize]
+                .children
+                .expect("leaves have bound 0");
+            add(l, &mut heap, &mut cut);
+            add(r, &mut heap, &mut cut);
+        }
+        let top = heap.peek().map(|p| p.key);
+        cut.extend(heap.into_iter().map(|p| (p.node, p.item)));
+        cut.sort_unstable_by_key(|e| e.0);
+        (cut, top)
+    }
+
+    /// The stopping rule at a cut: its largest key at most `threshold` × the smallest positive
+    /// estimate of the representatives (evaluated afresh), or nothing left to refine.
+    fn rule_holds(
+        lit: &LitScene,
+        s: &Summaries,
+        reps: &Receivers,
+        threshold: f32,
+        cut: &[(u32, Vec3)],
+        top: Option<f32>,
+    ) -> bool {
+        let nodes: Vec<u32> = cut.iter().map(|e| e.0).collect();
+        let bounds: Vec<Vec3> = cut.iter().map(|e| e.1).collect();
+        let mut v = Vec::new();
+        evaluate_nodes(Isa::Scalar, lit, s, &nodes, &bounds, reps, &mut v);
+        let mut est = vec![Vec3::ZERO; reps.len];
+        for row in v.chunks_exact(reps.len) {
+            for (e, x) in est.iter_mut().zip(row) {
+                *e += *x;
+            }
+        }
+        let floor = smallest(&est);
+        let limit = if floor.is_finite() {
+            threshold * floor
+        } else {
+            0.0
+        };
+        top.is_none_or(|k| k <= limit)
+    }
+
+    /// `select_group` checks its stopping rule only now and then (its doc): against the eager
+    /// rule, which tests it after every refinement, its cut is the same where the eager one ends
+    /// at the cap, never smaller, always a cut of the bound order (the eager selection's cut at
+    /// the same size), and one at which the rule holds unless it is at the cap. Its
+    /// representatives' values are the ones the cut gives there.
+    #[test]
+    fn lazy_checks_end_where_the_eager_rule_would_or_later() {
+        let (mut at_cap, mut early, mut later) = (0, 0, 0);
+        for seed in 0..16u64 {
+            let cfg = config(seed, 24, seed % 3 == 0);
+            let lit = LitScene::new(
+                &cfg.tree,
+                cfg.tris.clone(),
+                cfg.light,
+                ReceiverOptions::default(),
+            );
+            let s = Summaries::new(&lit);
+            let mut rng = Rng::keyed(seed, 43, 9);
+            for m in 0..4 {
+                let pts: Vec<_> = group(&mut rng, m, 20, 0.05)
+                    .into_iter()
+                    .filter(|p| !p.1.is_black())
+                    .collect();
+                if pts.is_empty() {
+                    continue;
+                }
+                let g = GroupSummary::new(&pts);
+                let mut reps = Receivers::default();
+                for (x, rx) in pts.iter().take(REPRESENTATIVES) {
+                    reps.push(*x, rx, true);
+                }
+                reps.pad();
+                for threshold in [0.0, 0.01, 0.1, 0.5] {
+                    for max_cut in [6, 1000] {
+                        let opts = CutOptions { threshold, max_cut };
+                        let mut cut = GroupCut::default();
+                        let mut scratch = SelectScratch::default();
+                        lit.select_group(Isa::Scalar, &s, &g, &reps, &opts, &mut scratch, &mut cut);
+                        let size = cut.nodes.len();
+                        // The eager stop: the first size at which the rule holds or the cap is met.
+                        let eager = (1..=max_cut as usize)
+                            .find(|&k| {
+                                let (c, top) = refined(&lit, &g, k - 1);
+                                c.len() < k
+                                    || k == max_cut as usize
+                                    || rule_holds(&lit, &s, &reps, threshold, &c, top)
+                            })
+                            .expect("the cap ends it");
+                        let (want, top) = refined(&lit, &g, size - 1);
+                        let what = format!("seed {seed} m {m} threshold {threshold} cap {max_cut}");
+                        assert_eq!(
+                            cut.nodes,
+                            want.iter().map(|e| e.0).collect::<Vec<_>>(),
+                            "{what}"
+                        );
+                        assert_eq!(
+                            cut.bounds,
+                            want.iter().map(|e| e.1).collect::<Vec<_>>(),
+                            "{what}"
+                        );
+                        let (eager_cut, _) = refined(&lit, &g, eager - 1);
+                        assert!(
+                            size >= eager_cut.len(),
+                            "{what}: {size} < eager {}",
+                            eager_cut.len()
+                        );
+                        if eager_cut.len() == max_cut as usize {
+                            assert_eq!(size, max_cut as usize, "{what}");
+                            at_cap += 1;
+                        } else if size < max_cut as usize {
+                            assert!(rule_holds(&lit, &s, &reps, threshold, &want, top), "{what}");
+                            early += 1;
+                            later += usize::from(size > eager_cut.len());
+                        }
+                        let mut direct = Vec::new();
+                        evaluate_nodes(
+                            Isa::Scalar,
+                            &lit,
+                            &s,
+                            &cut.nodes,
+                            &cut.bounds,
+                            &reps,
+                            &mut direct,
+                        );
+                        assert_eq!(cut.rep_values, direct, "{what}");
+                    }
+                }
+            }
+        }
+        // Both endings must occur, or half of the comparison proves nothing.
+        assert!(at_cap > 10 && early > 10, "at cap {at_cap}, early {early}");
+        eprintln!(
+            "cuts at the cap {at_cap}, ended by the rule {early} (of those later than eager: {later})"
+        );
     }
 
     proptest! {

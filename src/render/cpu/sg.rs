@@ -129,7 +129,8 @@ pub struct SgStats {
     /// Cuts that ended at the `max_cut` cap rather than at the error threshold.
     pub cuts_at_cap: u64,
     /// Nodes whose bound and approximation were evaluated, per pixel (all samples and lights,
-    /// including vertex cuts shared out over the pixels).
+    /// including vertex cuts shared out over the pixels; for tile cuts, one per node and sample
+    /// the kernel evaluated it at, during selection at the representatives and in shading).
     pub nodes_evaluated_per_pixel: f64,
     /// Of those, exact triangle integrations (leaves, or every triangle for `sg-brute`).
     pub leaves_evaluated_per_pixel: f64,
