@@ -14,6 +14,14 @@
 //! the largest; the diffuse part is at most the largest. Every factor of the point bound is
 //! monotone in these quantities. `group_bound_holds_for_every_sample` checks it on random
 //! groups.
+//!
+//! **Near nodes.** The ball bound grows without limit as a node comes within the group's radius
+//! of the ball (its distance factor `1/(d − r)²`), so near nodes would be refined far below
+//! what any one sample needs. [`Group::bound`] therefore takes, for a node whose box lies
+//! within [`NEAR`] radii of the group's centre, the smaller of the ball bound and the largest
+//! point bound over the group's samples: both are at least the point bound at every sample, so
+//! the guarantee holds for either and for their minimum (`group_bound_holds_for_every_sample`
+//! checks the near bound too).
 
 use super::bound::{angle, cos_max_bound, cos_minus_one, radiance_bound};
 use super::kernel::leaf::LeafSummary;
@@ -32,6 +40,57 @@ use std::collections::BinaryHeap;
 /// How many of a group's samples estimate its radiance during selection (spread evenly over
 /// the group): one vector of the widest lanes.
 pub const REPRESENTATIVES: usize = 16;
+
+/// Nodes whose box lies within this many group radii of the group's centre are bounded by
+/// the largest point bound over the group's samples where that is smaller than the ball bound
+/// (see the module's "Near nodes"). Measured on ring, dragon and bunny
+/// (`docs/sg-performance.md`, "Near nodes").
+pub const NEAR: usize = 1;
+
+/// A group of receivers as the cut selection sees it: its summary for the ball bound, its
+/// samples for the point bounds of near nodes, and how near is near (in group radii; 0 never
+/// takes point bounds).
+pub struct Group<'a> {
+    pub summary: GroupSummary,
+    pub points: &'a [(Vec3, ReceiverLobes)],
+    pub near: f32,
+}
+
+impl<'a> Group<'a> {
+    pub fn new(points: &'a [(Vec3, ReceiverLobes)], near: f32) -> Group<'a> {
+        Group {
+            summary: GroupSummary::new(points),
+            points,
+            near,
+        }
+    }
+
+    /// Upper bound of node `node`'s contribution at every sample of the group: the ball bound
+    /// ([`LitScene::group_bound`]), or for a near node the smaller of it and the largest point
+    /// bound over the samples.
+    pub fn bound(&self, lit: &LitScene, node: u32) -> Vec3 {
+        let ball = lit.group_bound(node, &self.summary);
+        let g = &self.summary;
+        if self.points.len() < 2 || !(self.near > 0.0) || ball == Vec3::ZERO {
+            return ball;
+        }
+        let n = &lit.tree.nodes[node as usize];
+        let d = (g.centre.clamp(n.bbox_min, n.bbox_max) - g.centre).length();
+        if d >= self.near * g.radius {
+            return ball;
+        }
+        // The ball bound stands as soon as one sample's point bound reaches it (e.g. a sample
+        // inside the node's box, where both are infinite).
+        let mut points = Vec3::ZERO;
+        for (x, rx) in self.points {
+            points = points.max(lit.bound(node, *x, rx));
+            if points.cmpge(ball).all() {
+                return ball;
+            }
+        }
+        ball.min(points)
+    }
+}
 
 /// What the group bound needs of a group of receivers.
 #[derive(Clone, Copy, Debug)]
@@ -316,7 +375,7 @@ fn smallest(est: &[Vec3]) -> f32 {
 }
 
 impl LitScene<'_> {
-    /// Selects the cut of group `g` (METHOD §6 with the group bound): from the root, repeatedly
+    /// Selects the cut of group `g` (METHOD §6 with the group bound, [`Group::bound`]): from the root, repeatedly
     /// replace the node with the largest group bound (luminance) by its two children, until that
     /// bound is at most `threshold` × the smallest positive estimate among the representatives
     /// `reps` (their radiance under the current cut, evaluated on the SIMD lanes) or the cut
@@ -336,7 +395,7 @@ impl LitScene<'_> {
         &self,
         isa: Isa,
         s: &Summaries,
-        g: &GroupSummary,
+        g: &Group,
         reps: &Receivers,
         opts: &CutOptions,
         scratch: &mut SelectScratch,
@@ -384,7 +443,7 @@ impl LitScene<'_> {
                 settled.push((node, bound));
             }
         };
-        push(0, self.group_bound(0, g), &mut heap, settled);
+        push(0, g.bound(self, 0), &mut heap, settled);
         let mut size = 1usize;
         // The estimate's floor at the last check (none yet), and the size from which the next
         // check may run.
@@ -447,7 +506,7 @@ impl LitScene<'_> {
                 continue;
             };
             for c in [l, r] {
-                push(c, self.group_bound(c, g), &mut heap, settled);
+                push(c, g.bound(self, c), &mut heap, settled);
             }
             size += 1;
         }
@@ -508,7 +567,7 @@ mod tests {
                 if pts.is_empty() {
                     continue;
                 }
-                let g = GroupSummary::new(&pts);
+                let g = Group::new(&pts, NEAR as f32);
                 let mut reps = Receivers::default();
                 for (x, rx) in pts.iter().take(REPRESENTATIVES) {
                     reps.push(*x, rx, true);
@@ -539,11 +598,11 @@ mod tests {
 
     /// The cut after `steps` refinements by the group bound alone (the order `select_group`
     /// follows): its nodes (ascending) with their bounds, and the largest key left to refine.
-    fn refined(lit: &LitScene, g: &GroupSummary, steps: usize) -> (Vec<(u32, Vec3)>, Option<f32>) {
+    fn refined(lit: &LitScene, g: &Group, steps: usize) -> (Vec<(u32, Vec3)>, Option<f32>) {
         let mut heap = BinaryHeap::new();
         let mut cut = Vec::new();
         let add = |node: u32, heap: &mut BinaryHeap<Pending<Vec3>>, cut: &mut Vec<(u32, Vec3)>| {
-            let b = lit.group_bound(node, g);
+            let b = g.bound(lit, node);
             let key = luminance(b);
             if key > 0.0 || key.is_nan() {
                 let key = if key.is_nan() { f32::INFINITY } else { key };
@@ -622,7 +681,7 @@ mod tests {
                 if pts.is_empty() {
                     continue;
                 }
-                let g = GroupSummary::new(&pts);
+                let g = Group::new(&pts, NEAR as f32);
                 let mut reps = Receivers::default();
                 for (x, rx) in pts.iter().take(REPRESENTATIVES) {
                     reps.push(*x, rx, true);
@@ -698,7 +757,8 @@ mod tests {
         /// The group bound is conservative for every sample of the group: for every node of
         /// random configurations, at every sample it is at least the exact sum of the node's
         /// leaves (the true contribution, which with the clamped approximation lies in
-        /// [0, bound]) and at least the point bound. Tolerance: 1e-6 relative plus 1e-12
+        /// [0, bound]) and at least the point bound; the near bound ([`Group::bound`]) too, and
+        /// it is never above the ball bound. Tolerance: 1e-6 relative plus 1e-12
         /// absolute for the f32 rounding of the sums, as the point bound's own test.
         #[test]
         fn group_bound_holds_for_every_sample(
@@ -717,11 +777,21 @@ mod tests {
                     continue;
                 }
                 let g = GroupSummary::new(&pts);
+                // The near bound, with every node near and with the default reach.
+                let all_near = Group::new(&pts, f32::INFINITY);
+                let near = Group::new(&pts, NEAR as f32);
                 for node in 0..cfg.tree.nodes.len() as u32 {
                     let gb = lit.group_bound(node, &g);
                     let tn = &cfg.tree.nodes[node as usize];
                     if tn.is_leaf() {
                         continue;
+                    }
+                    let nb = [all_near.bound(&lit, node), near.bound(&lit, node)];
+                    for b in nb {
+                        for c in 0..3 {
+                            // The near bound takes a minimum with the ball bound: never above it.
+                            prop_assert!(b[c] <= gb[c], "node {node}: near {} > ball {}", b[c], gb[c]);
+                        }
                     }
                     for (x, rx) in &pts {
                         let exact = lit.tris[tn.range()]
@@ -739,6 +809,13 @@ mod tests {
                                 "node {node} m {m} channel {c}: point bound {} > group bound {}",
                                 pb[c], gb[c]
                             );
+                            for b in nb {
+                                prop_assert!(
+                                    exact[c] <= b[c] * (1.0 + 1e-6) + 1e-12,
+                                    "node {node} m {m} channel {c}: exact {} > near bound {}",
+                                    exact[c], b[c]
+                                );
+                            }
                         }
                     }
                 }

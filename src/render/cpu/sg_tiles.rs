@@ -13,7 +13,7 @@ use crate::math::luminance;
 use crate::render::cpu::Progress;
 use crate::render::cpu::surface::SurfacePoint;
 use crate::sg::group::{
-    GroupCut, GroupSummary, REPRESENTATIVES, SelectScratch, Summaries, evaluate_nodes,
+    Group, GroupCut, NEAR, REPRESENTATIVES, SelectScratch, Summaries, evaluate_nodes,
 };
 use crate::sg::kernel::receivers::Receivers;
 use crate::sg::kernel::simd::Isa;
@@ -36,6 +36,13 @@ pub const GROUP_SAMPLES: usize = 64;
 /// measurement knob, `docs/sg-performance.md`; 0 never splits).
 pub fn split_min() -> usize {
     env_knob("INTERREFLECT_SPLIT_MIN").unwrap_or(SPLIT_MIN)
+}
+
+/// How near (in group radii) a node must be for the group bound to try the samples' point
+/// bounds (`sg::group::NEAR`), or the reach `INTERREFLECT_NEAR` asks for (a measurement knob,
+/// `docs/sg-performance.md`; 0 never tries them).
+pub fn near() -> f32 {
+    env_knob("INTERREFLECT_NEAR").unwrap_or(NEAR) as f32
 }
 
 /// A measurement knob from the environment: the variable's value if it parses as a count.
@@ -64,6 +71,8 @@ struct Pass<'p> {
     summaries: &'p [Summaries],
     /// Groups of more than this many samples whose cut is unbounded are halved (0: never).
     split: usize,
+    /// Reach of the near bound in group radii (0: ball bound only).
+    near: f32,
     tally: &'p Tally,
 }
 
@@ -94,6 +103,7 @@ impl Ctx<'_> {
             isa: Isa::detect(),
             summaries: &summaries,
             split: split_min(),
+            near: near(),
             tally,
         };
         let (w, h) = (self.opts.width as usize, self.opts.height as usize);
@@ -191,11 +201,12 @@ impl Ctx<'_> {
             isa,
             summaries,
             split,
+            near,
             tally,
         } = *pass;
         let n = group.len();
         let points: Vec<(Vec3, ReceiverLobes)> = group.iter().map(|s| (s.x, s.rx)).collect();
-        let summary = GroupSummary::new(&points);
+        let group_bound = Group::new(&points, near);
         // The representatives estimate during selection; the selection's values at them are
         // reused, so shading evaluates the cut at the others (`rest`) only.
         let m = n.min(REPRESENTATIVES);
@@ -224,7 +235,7 @@ impl Ctx<'_> {
             lit.select_group(
                 isa,
                 sums,
-                &summary,
+                &group_bound,
                 &sc.reps,
                 &self.opts.cut,
                 &mut sc.select,
