@@ -1089,6 +1089,33 @@ impl ApproxVisibility {
 /// 0.77, 0.97, 1.25 and 1.71 s.
 pub const NODE_VISIBILITY_DEPTH: u32 = 1;
 
+/// Results of the rays to a cut node's receiver-independent targets ([`Ctx::node_targets`])
+/// that a group of receivers shares: bit k of `known` says target k's result is known, bit k
+/// of `visible` what it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct SharedRays {
+    pub(super) known: u8,
+    pub(super) visible: u8,
+}
+
+impl SharedRays {
+    /// Targets per node at most: 2^[`NODE_VISIBILITY_DEPTH`] descendants, or a leaf's four
+    /// visibility points.
+    pub(super) const MAX: usize = 4;
+    /// Nothing shared: every ray is traced.
+    pub(super) const NONE: SharedRays = SharedRays {
+        known: 0,
+        visible: 0,
+    };
+
+    const _FITS: () = assert!(1 << NODE_VISIBILITY_DEPTH <= SharedRays::MAX);
+
+    /// Target k's shared result, if known.
+    fn get(self, k: usize) -> Option<bool> {
+        (self.known & (1 << k) != 0).then_some(self.visible & (1 << k) != 0)
+    }
+}
+
 /// Cuts per light and vertex: `cuts[light][vertex]` (empty for vertices no sample needs).
 type VertexCuts = Vec<Vec<Vec<u32>>>;
 
@@ -1142,10 +1169,43 @@ impl Ctx<'_> {
     /// [`NODE_VISIBILITY_DEPTH`] levels down, weighted by its subtree's light weight. Returns
     /// (fraction, rays).
     pub(super) fn node_visibility(&self, xo: Vec3, lit: &LitScene, node: u32) -> (f32, u64) {
+        self.node_visibility_shared(xo, lit, node, SharedRays::NONE)
+    }
+
+    /// [`Ctx::node_visibility`] with the results of the rays to the node's targets
+    /// ([`Ctx::node_targets`]) that `shared` knows taken from it instead of traced.
+    pub(super) fn node_visibility_shared(
+        &self,
+        xo: Vec3,
+        lit: &LitScene,
+        node: u32,
+        shared: SharedRays,
+    ) -> (f32, u64) {
+        let (mut num, mut den, mut rays) = (0.0f32, 0.0f32, 0u64);
+        let mut k = 0;
+        self.for_node_targets(lit, node, |n, w| {
+            den += w;
+            let seen = match shared.get(k) {
+                Some(v) => v,
+                None => {
+                    rays += 1;
+                    self.visible(xo, self.rep_point(lit, n))
+                }
+            };
+            if seen {
+                num += w;
+            }
+            k += 1;
+        });
+        (if den > 0.0 { num / den } else { 0.0 }, rays)
+    }
+
+    /// Calls `f(descendant, weight)` for the descendants of `node` whose representatives
+    /// [`Ctx::node_visibility`] traces rays to, in its order.
+    fn for_node_targets(&self, lit: &LitScene, node: u32, mut f: impl FnMut(u32, f32)) {
         let depth = NODE_VISIBILITY_DEPTH;
         let mut stack = [(node, 0u32); 2 << NODE_VISIBILITY_DEPTH];
         let mut len = 1;
-        let (mut num, mut den, mut rays) = (0.0f32, 0.0f32, 0u64);
         while len > 0 {
             len -= 1;
             let (n, d) = stack[len];
@@ -1158,16 +1218,46 @@ impl Ctx<'_> {
                 _ => {
                     let w = lit.nodes[n as usize].weight;
                     if w > 0.0 {
-                        den += w;
-                        rays += 1;
-                        if self.visible(xo, self.rep_point(lit, n)) {
-                            num += w;
-                        }
+                        f(n, w);
                     }
                 }
             }
         }
-        (if den > 0.0 { num / den } else { 0.0 }, rays)
+    }
+
+    /// The points a cut node's visibility traces rays to whatever the receiver (at most
+    /// [`SharedRays::MAX`], in the order [`Ctx::node_visibility_shared`] and
+    /// [`Ctx::triangle_visibility_shared`] number them; `None` for a point they skip): the
+    /// representatives of an inner node's descendants, a leaf's lit visibility points. A
+    /// leaf's point along the receiver's lobe depends on the receiver and is not among them.
+    pub(super) fn node_targets(
+        &self,
+        lit: &LitScene,
+        node: u32,
+    ) -> [Option<Vec3>; SharedRays::MAX] {
+        let mut out = [None; SharedRays::MAX];
+        let tn = &lit.tree.nodes[node as usize];
+        if tn.is_leaf() {
+            let t = &lit.tris[tn.first as usize];
+            for (k, p) in t.visibility_points().into_iter().enumerate() {
+                if t.light_mask & (1 << k) != 0 {
+                    out[k] = Some(p);
+                }
+            }
+        } else {
+            let mut k = 0;
+            self.for_node_targets(lit, node, |n, _| {
+                out[k] = Some(self.rep_point(lit, n));
+                k += 1;
+            });
+        }
+        out
+    }
+
+    /// Is the segment from the receiver (offset point `xo`) to `target` on a reflector free?
+    /// (For callers that share rays between receivers.)
+    pub(super) fn ray_visible(&self, xo: Vec3, target: Vec3) -> bool {
+        self.visible(xo, target)
     }
 
     /// Visibility factor of a reflector triangle seen from the receiver (offset point `xo`),
@@ -1186,6 +1276,20 @@ impl Ctx<'_> {
         k_light: usize,
         rx: &ReceiverLobes,
     ) -> (f32, u64) {
+        self.triangle_visibility_shared(xo, t, k_light, rx, SharedRays::NONE)
+    }
+
+    /// [`Ctx::triangle_visibility`] with the results of the rays to the triangle's lit
+    /// visibility points that `shared` knows taken from it instead of traced (the point along
+    /// the receiver's lobe is always traced).
+    pub(super) fn triangle_visibility_shared(
+        &self,
+        xo: Vec3,
+        t: &LitTriangle,
+        k_light: usize,
+        rx: &ReceiverLobes,
+        shared: SharedRays,
+    ) -> (f32, u64) {
         let light = &self.scene.lights[k_light];
         let map = self.map(k_light);
         let [a, b, c] = t.vertices;
@@ -1200,8 +1304,14 @@ impl Ctx<'_> {
             let w = weight(p);
             den += w;
             if w > 0.0 && t.light_mask & (1 << k) != 0 {
-                rays += 1;
-                if self.visible(xo, p) {
+                let seen = match shared.get(k) {
+                    Some(v) => v,
+                    None => {
+                        rays += 1;
+                        self.visible(xo, p)
+                    }
+                };
+                if seen {
                     num += w;
                 }
             }

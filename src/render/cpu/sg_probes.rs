@@ -1,7 +1,7 @@
 //! Diagnostics of the SG renderer, as ignored tests: the pixel probe (the transport of every
 //! reflector piece at one pixel against its exact integral) and the cut probe (sg against
 //! sg-brute, split into the nodes' approximation and their visibility). See
-//! `docs/sg-renderer.md`.
+//! `docs/sg-renderer.md`. Also the tests of the shadow-ray helpers that need the same setup.
 
 use super::*;
 use crate::sg::transport::brute_force::{Config, one_bounce_exact_shaded};
@@ -556,4 +556,80 @@ fn firefly_probe() {
             e.value
         );
     }
+}
+
+/// The targets that tile cuts share between a group's samples (`Ctx::node_targets`) are the
+/// points the node's visibility traces, numbered alike: with every target's result known from
+/// the receiver's own rays, the shared visibility equals the traced one exactly, and it traces
+/// no ray for an inner node and only the lobe point's (and its light ray) for a leaf. On the
+/// bunny, where the bunny blocks part of the floor's view of itself, so that a mismatch in
+/// the numbering would show.
+#[test]
+fn shared_targets_are_the_points_the_visibility_traces() {
+    let scene = Scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/bunny.toml"
+    )))
+    .expect("the bunny scene loads");
+    let w = 24;
+    let su = Setup::new(scene, w, false, CutOptions::default());
+    let lits = [su.lit()];
+    let ctx = su.ctx(&lits);
+    let lit = &lits[0];
+    let camera = su.scene.camera.with_resolution(w, su.opts.height);
+    let (mut checked, mut blocked, mut seen) = (0, 0, 0);
+    for py in (0..su.opts.height).step_by(3) {
+        for px in (0..w).step_by(3) {
+            let dir = camera.ray_dir(px as f32 + 0.5, py as f32 + 0.5);
+            let Some(hit) = su.accel.intersect(camera.position, dir, 0.0, f32::INFINITY) else {
+                continue;
+            };
+            let wo = (camera.position - su.scene.mesh.point(hit.tri, hit.u, hit.v)).normalize();
+            let Some(sp) = SurfacePoint::from_hit(&su.scene, &hit, wo) else {
+                continue;
+            };
+            let rx = ReceiverLobes::new(su.scene.tri_material(hit.tri), sp.frame.n, wo);
+            let xo = sp.offset(su.eps);
+            for node in (0..lit.tree.nodes.len() as u32).step_by(37) {
+                let mut shared = SharedRays::NONE;
+                for (k, p) in ctx.node_targets(lit, node).into_iter().enumerate() {
+                    if let Some(p) = p {
+                        let v = ctx.ray_visible(xo, p);
+                        shared.known |= 1 << k;
+                        shared.visible |= u8::from(v) << k;
+                        if v { seen += 1 } else { blocked += 1 }
+                    }
+                }
+                let tn = &lit.tree.nodes[node as usize];
+                let (own, shared_f, shared_rays, most) = if tn.is_leaf() {
+                    let t = &lit.tris[tn.first as usize];
+                    let (own, _) = ctx.triangle_visibility(xo, t, 0, &rx);
+                    let (f, r) = ctx.triangle_visibility_shared(xo, t, 0, &rx, shared);
+                    (own, f, r, 2)
+                } else {
+                    let (own, _) = ctx.node_visibility(xo, lit, node);
+                    let (f, r) = ctx.node_visibility_shared(xo, lit, node, shared);
+                    (own, f, r, 0)
+                };
+                assert_eq!(
+                    own.to_bits(),
+                    shared_f.to_bits(),
+                    "node {node} at pixel ({px}, {py})"
+                );
+                assert!(
+                    shared_rays <= most,
+                    "node {node}: {shared_rays} rays with every target shared"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(
+        checked > 1000,
+        "only {checked} (receiver, node) pairs checked"
+    );
+    assert!(
+        blocked > 0 && seen > 0,
+        "targets blocked {blocked}, seen {seen}: the scene must have both"
+    );
 }

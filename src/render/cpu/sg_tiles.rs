@@ -7,7 +7,7 @@
 //! until the untraced rest holds at most [`RAY_TAIL`] of its estimate; the rest is weighed by
 //! the traced values' mean visibility (weighted by luminance).
 
-use super::sg::{ApproxVisibility, Ctx, Tally};
+use super::sg::{ApproxVisibility, Ctx, SharedRays, Tally};
 use crate::accel::Hit;
 use crate::math::luminance;
 use crate::render::cpu::Progress;
@@ -45,6 +45,16 @@ pub fn near() -> f32 {
     env_knob("INTERREFLECT_NEAR").unwrap_or(NEAR) as f32
 }
 
+/// Samples of a group that must trace a node before its rays are shared
+/// ([`Ctx::traced_group`]), or the count `INTERREFLECT_SHARE` asks for (a measurement knob,
+/// `docs/sg-performance.md`; 0 never shares).
+pub fn share_min() -> usize {
+    env_knob("INTERREFLECT_SHARE").unwrap_or(SHARE_MIN)
+}
+
+/// See [`share_min`].
+pub const SHARE_MIN: usize = 32;
+
 /// A measurement knob from the environment: the variable's value if it parses as a count.
 fn env_knob(name: &str) -> Option<usize> {
     std::env::var(name).ok().and_then(|v| v.parse().ok())
@@ -73,6 +83,8 @@ struct Pass<'p> {
     split: usize,
     /// Reach of the near bound in group radii (0: ball bound only).
     near: f32,
+    /// Nodes that at least this many of a group's samples trace share their rays (0: never).
+    share: usize,
     tally: &'p Tally,
 }
 
@@ -104,6 +116,7 @@ impl Ctx<'_> {
             summaries: &summaries,
             split: split_min(),
             near: near(),
+            share: share_min(),
             tally,
         };
         let (w, h) = (self.opts.width as usize, self.opts.height as usize);
@@ -202,6 +215,7 @@ impl Ctx<'_> {
             summaries,
             split,
             near,
+            share,
             tally,
         } = *pass;
         let n = group.len();
@@ -284,21 +298,29 @@ impl Ctx<'_> {
                 evaluated: (cut.nodes.len() * rest) as u64,
                 leaves: (leaves * rest) as u64,
             });
-            let (values, rep_values) = (&sc.values, &cut.rep_values);
-            for (j, s) in group.iter().enumerate() {
-                let value = |i: usize| match sc.source[j] {
-                    Column::Rep(r) => rep_values[i * m + r],
-                    Column::Rest(q) => values[i * rest + q],
-                };
-                radiance[j] += match self.vpl_vis(k) {
-                    Some(vv) => approx_visible(vv, &cut.nodes, value, s.xo),
-                    None => {
-                        let (v, r) =
-                            self.traced_visible(lit, k, &cut.nodes, value, s, &mut sc.order);
-                        rays += r;
-                        v
+            let (values, rep_values, source) = (&sc.values, &cut.rep_values, &sc.source);
+            let value = |j: usize, i: usize| match source[j] {
+                Column::Rep(r) => rep_values[i * m + r],
+                Column::Rest(q) => values[i * rest + q],
+            };
+            match self.vpl_vis(k) {
+                Some(vv) => {
+                    for (j, s) in group.iter().enumerate() {
+                        radiance[j] += approx_visible(vv, &cut.nodes, |i| value(j, i), s.xo);
                     }
-                };
+                }
+                None => {
+                    rays += self.traced_group(
+                        lit,
+                        k,
+                        &cut.nodes,
+                        group,
+                        value,
+                        share,
+                        &mut sc.rays,
+                        &mut radiance,
+                    );
+                }
             }
         }
         tally.rays.fetch_add(rays, Ordering::Relaxed);
@@ -307,52 +329,147 @@ impl Ctx<'_> {
         out.extend(group.iter().zip(radiance).map(|(s, v)| (s.index, v, size)));
     }
 
-    /// A sample's radiance over a cut with shadow rays: rays for the largest values until the
-    /// untraced rest is at most [`RAY_TAIL`] of the sum, which takes the traced part's mean
-    /// visibility. Returns (radiance, rays).
-    fn traced_visible(
+    /// The group's radiance over a cut with shadow rays, added to `radiance`: each sample
+    /// traces rays for its largest values until the untraced rest is at most [`RAY_TAIL`] of
+    /// its sum, and the rest takes the traced part's mean visibility ([`plan_rays`]). A node
+    /// that at least `share` samples trace (and `share` > 0) has the rays to its targets
+    /// ([`Ctx::node_targets`]) traced from the group's representatives first; where they all
+    /// agree, every sample takes their result instead of tracing its own
+    /// ([`SHARE_MIN`], `docs/sg-performance.md`). Returns the rays traced.
+    #[allow(clippy::too_many_arguments)]
+    fn traced_group(
         &self,
         lit: &LitScene,
         k: usize,
         nodes: &[u32],
-        value: impl Fn(usize) -> Vec3,
-        s: &Sample,
-        order: &mut Vec<(f32, u32)>,
-    ) -> (Vec3, u64) {
-        order.clear();
-        let mut total = 0.0f32;
-        for i in 0..nodes.len() {
-            let l = luminance(value(i)).max(0.0);
-            if l > 0.0 {
-                order.push((l, i as u32));
-                total += l;
+        group: &[Sample],
+        value: impl Fn(usize, usize) -> Vec3,
+        share: usize,
+        sc: &mut RayScratch,
+        radiance: &mut [Vec3],
+    ) -> u64 {
+        let n = group.len();
+        sc.plans.clear();
+        sc.starts.clear();
+        sc.rest.clear();
+        for j in 0..n {
+            sc.starts.push(sc.plans.len());
+            let rest = plan_rays(|i| value(j, i), nodes.len(), &mut sc.order, &mut sc.plans);
+            sc.rest.push(rest);
+        }
+        sc.starts.push(sc.plans.len());
+        let mut rays = 0u64;
+        sc.shared.clear();
+        sc.shared.resize(nodes.len(), SharedRays::NONE);
+        let m = n.min(REPRESENTATIVES);
+        if share > 0 && n >= share && m > 1 {
+            sc.count.clear();
+            sc.count.resize(nodes.len(), 0);
+            for &(i, _) in &sc.plans {
+                sc.count[i as usize] += 1;
+            }
+            for (i, &node) in nodes.iter().enumerate() {
+                if (sc.count[i] as usize) < share {
+                    continue;
+                }
+                let mut shared = SharedRays::NONE;
+                for (t, p) in self.node_targets(lit, node).into_iter().enumerate() {
+                    let Some(p) = p else { continue };
+                    let (mut any, mut all) = (false, true);
+                    // The representatives, as `shade_group` picks them.
+                    for r in 0..m {
+                        rays += 1;
+                        let v = self.ray_visible(group[r * n / m].xo, p);
+                        any |= v;
+                        all &= v;
+                        if any && !all {
+                            break;
+                        }
+                    }
+                    if any == all {
+                        shared.known |= 1 << t;
+                        shared.visible |= u8::from(all) << t;
+                    }
+                }
+                sc.shared[i] = shared;
             }
         }
-        // Largest first; ties by position, so the order is deterministic.
-        order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let (mut traced, mut seen, mut rays) = (0.0f32, 0.0f32, 0u64);
-        let (mut lit_sum, mut rest) = (Vec3::ZERO, Vec3::ZERO);
-        for &(l, i) in order.iter() {
-            let v = value(i as usize);
-            if total - traced <= RAY_TAIL * total {
-                rest += v;
-                continue;
+        for (j, s) in group.iter().enumerate() {
+            let (mut traced, mut seen, mut lit_sum) = (0.0f32, 0.0f32, Vec3::ZERO);
+            for &(i, l) in &sc.plans[sc.starts[j]..sc.starts[j + 1]] {
+                let i = i as usize;
+                let tn = &lit.tree.nodes[nodes[i] as usize];
+                let (f, r) = if tn.is_leaf() {
+                    self.triangle_visibility_shared(
+                        s.xo,
+                        &lit.tris[tn.first as usize],
+                        k,
+                        &s.rx,
+                        sc.shared[i],
+                    )
+                } else {
+                    self.node_visibility_shared(s.xo, lit, nodes[i], sc.shared[i])
+                };
+                rays += r;
+                traced += l;
+                seen += l * f;
+                lit_sum += value(j, i) * f;
             }
-            let node = nodes[i as usize];
-            let tn = &lit.tree.nodes[node as usize];
-            let (f, r) = if tn.is_leaf() {
-                self.triangle_visibility(s.xo, &lit.tris[tn.first as usize], k, &s.rx)
-            } else {
-                self.node_visibility(s.xo, lit, node)
-            };
-            rays += r;
-            traced += l;
-            seen += l * f;
-            lit_sum += v * f;
+            let mean = if traced > 0.0 { seen / traced } else { 1.0 };
+            radiance[j] += lit_sum + sc.rest[j] * mean;
         }
-        let mean = if traced > 0.0 { seen / traced } else { 1.0 };
-        (lit_sum + rest * mean, rays)
+        rays
     }
+}
+
+/// Which of a sample's values over a cut (`value(i)`, i < `len`) get shadow rays: the largest
+/// (by luminance; ties by position, so the order is deterministic) until the untraced rest is
+/// at most [`RAY_TAIL`] of the sum. Appends them to `plan` as (position, luminance), largest
+/// first, and returns the sum of the rest.
+fn plan_rays(
+    value: impl Fn(usize) -> Vec3,
+    len: usize,
+    order: &mut Vec<(f32, u32)>,
+    plan: &mut Vec<(u32, f32)>,
+) -> Vec3 {
+    order.clear();
+    let mut total = 0.0f32;
+    for i in 0..len {
+        let l = luminance(value(i)).max(0.0);
+        if l > 0.0 {
+            order.push((l, i as u32));
+            total += l;
+        }
+    }
+    // Largest first; ties by position. Only the traced values need their order, so they are
+    // selected in chunks of doubling size (each chunk the largest of what is left, then
+    // sorted) until the untraced rest is small enough; the rest is summed unsorted.
+    let cmp = |a: &(f32, u32), b: &(f32, u32)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1));
+    let tail = RAY_TAIL * total;
+    let (mut traced, mut rest) = (0.0f32, Vec3::ZERO);
+    let (mut start, mut chunk) = (0, 32);
+    let mut stop = order.len();
+    'chunks: while start < order.len() {
+        let end = (start + chunk).min(order.len());
+        if end < order.len() {
+            order[start..].select_nth_unstable_by(end - start - 1, cmp);
+        }
+        order[start..end].sort_unstable_by(cmp);
+        for (at, &(l, i)) in order[start..end].iter().enumerate() {
+            if total - traced <= tail {
+                stop = start + at;
+                break 'chunks;
+            }
+            traced += l;
+            plan.push((i, l));
+        }
+        start = end;
+        chunk *= 2;
+    }
+    for &(_, i) in &order[stop..] {
+        rest += value(i as usize);
+    }
+    rest
 }
 
 /// The two halves of `group` along the longest axis of its positions' bounding box (ties by
@@ -403,5 +520,80 @@ struct TileScratch {
     values: Vec<Vec3>,
     /// Per sample of the group: where its values are (see `shade_group`).
     source: Vec<Column>,
+    rays: RayScratch,
+}
+
+/// Per-thread buffers of [`Ctx::traced_group`].
+#[derive(Default)]
+struct RayScratch {
     order: Vec<(f32, u32)>,
+    /// Every sample's planned rays (`plan_rays`), sample j's at `starts[j]..starts[j + 1]`.
+    plans: Vec<(u32, f32)>,
+    starts: Vec<usize>,
+    /// Per sample: the sum of its untraced values.
+    rest: Vec<Vec3>,
+    /// Per cut node: how many samples trace it, and the rays they share.
+    count: Vec<u32>,
+    shared: Vec<SharedRays>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::sampling::Rng;
+
+    /// The traced values `plan_rays` selects in chunks are exactly those of sorting all of them
+    /// (the same nodes in the same order), and the untraced rest is their sum up to f32
+    /// rounding in another order: at most 1e-5 of the total (1000 values of ~1e-7 relative
+    /// rounding each, summed).
+    #[test]
+    fn planned_rays_are_those_of_the_full_sort() {
+        let mut rng = Rng::keyed(26, 0, 0);
+        let (mut order, mut plan) = (Vec::new(), Vec::new());
+        for case in 0..200 {
+            let len = [0, 1, 5, 31, 32, 33, 100, 1000][case % 8];
+            // Heavy-tailed values, some zero, some tied.
+            let values: Vec<Vec3> = (0..len)
+                .map(|i| {
+                    let u = rng.f32();
+                    let l = if u < 0.1 {
+                        0.0
+                    } else if u < 0.2 {
+                        0.5
+                    } else {
+                        (u * 12.0).exp()
+                    };
+                    Vec3::new(l, l * (i % 3) as f32, 0.3 * l)
+                })
+                .collect();
+            plan.clear();
+            let rest = plan_rays(|i| values[i], len, &mut order, &mut plan);
+            // The reference: sort everything, walk it.
+            let mut all: Vec<(f32, u32)> = (0..len)
+                .map(|i| (luminance(values[i]).max(0.0), i as u32))
+                .filter(|e| e.0 > 0.0)
+                .collect();
+            let total: f32 = all.iter().map(|e| e.0).sum();
+            all.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            let (mut traced, mut want, mut want_rest) = (0.0f32, Vec::new(), Vec3::ZERO);
+            for &(l, i) in &all {
+                if total - traced <= RAY_TAIL * total {
+                    want_rest += values[i as usize];
+                } else {
+                    traced += l;
+                    want.push((i, l));
+                }
+            }
+            assert_eq!(plan, want, "case {case}: {len} values");
+            let scale = values
+                .iter()
+                .map(|v| v.max_element())
+                .sum::<f32>()
+                .max(1e-30);
+            assert!(
+                (rest - want_rest).abs().max_element() <= 1e-5 * scale,
+                "case {case}: rest {rest} against {want_rest}"
+            );
+        }
+    }
 }
