@@ -333,8 +333,8 @@ impl Ctx<'_> {
     /// traces rays for its largest values until the untraced rest is at most [`RAY_TAIL`] of
     /// its sum, and the rest takes the traced part's mean visibility ([`plan_rays`]). A node
     /// that at least `share` samples trace (and `share` > 0) has the rays to its targets
-    /// ([`Ctx::node_targets`]) traced from the group's representatives first; where they all
-    /// agree, every sample takes their result instead of tracing its own
+    /// ([`Ctx::node_targets`]) traced from probes spread over the group ([`spread_probes`])
+    /// first; where they all agree, every sample takes their result instead of tracing its own
     /// ([`SHARE_MIN`], `docs/sg-performance.md`). Returns the rays traced.
     #[allow(clippy::too_many_arguments)]
     fn traced_group(
@@ -368,6 +368,7 @@ impl Ctx<'_> {
             for &(i, _) in &sc.plans {
                 sc.count[i as usize] += 1;
             }
+            spread_probes(n, |j| group[j].xo, m, &mut sc.reach, &mut sc.probes);
             for (i, &node) in nodes.iter().enumerate() {
                 if (sc.count[i] as usize) < share {
                     continue;
@@ -376,10 +377,9 @@ impl Ctx<'_> {
                 for (t, p) in self.node_targets(lit, node).into_iter().enumerate() {
                     let Some(p) = p else { continue };
                     let (mut any, mut all) = (false, true);
-                    // The representatives, as `shade_group` picks them.
-                    for r in 0..m {
+                    for &r in &sc.probes {
                         rays += 1;
-                        let v = self.ray_visible(group[r * n / m].xo, p);
+                        let v = self.ray_visible(group[r as usize].xo, p);
                         any |= v;
                         all &= v;
                         if any && !all {
@@ -535,12 +535,131 @@ struct RayScratch {
     /// Per cut node: how many samples trace it, and the rays they share.
     count: Vec<u32>,
     shared: Vec<SharedRays>,
+    /// The group's probes ([`spread_probes`]) and each sample's squared distance to them.
+    probes: Vec<u32>,
+    reach: Vec<f32>,
+}
+
+/// Up to `m` of the group's `n` samples (at positions `pos(j)`), spread over it, whose
+/// shadow rays stand for the group's ([`Ctx::traced_group`]): farthest-point sampling over the
+/// positions, starting from the sample farthest from their centroid (ties to the lower index,
+/// so the choice is deterministic). On a flat tile the first four are its corners, so a shadow
+/// edge that is straight across the tile cannot leave every probe on one side of it (a
+/// half-plane that holds any sample holds a vertex of their convex hull); the rest fill the
+/// largest gaps. A sample at the position of an earlier probe is never picked.
+fn spread_probes(
+    n: usize,
+    pos: impl Fn(usize) -> Vec3,
+    m: usize,
+    reach: &mut Vec<f32>,
+    probes: &mut Vec<u32>,
+) {
+    probes.clear();
+    reach.clear();
+    if n == 0 || m == 0 {
+        return;
+    }
+    let centroid = (0..n).map(&pos).sum::<Vec3>() / n as f32;
+    reach.extend((0..n).map(|j| pos(j).distance_squared(centroid)));
+    loop {
+        // The sample farthest from the probes so far (from the centroid, for the first).
+        let (mut next, mut far) = (0, reach[0]);
+        for (j, &d) in reach.iter().enumerate().skip(1) {
+            if d > far {
+                (next, far) = (j, d);
+            }
+        }
+        if !probes.is_empty() && far <= 0.0 {
+            return;
+        }
+        probes.push(next as u32);
+        if probes.len() == m {
+            return;
+        }
+        let p = pos(next);
+        let first = probes.len() == 1;
+        for (j, d) in reach.iter_mut().enumerate() {
+            let to = pos(j).distance_squared(p);
+            *d = if first { to } else { d.min(to) };
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::sampling::Rng;
+
+    /// Which side of the line `a·(x, z) = c` each probe and each sample is on: a straight
+    /// shadow edge that splits the samples must split the probes too, or the shared rays
+    /// would give one side the other side's visibility.
+    fn split_unseen(points: &[Vec3], probes: &[u32], a: (f32, f32), c: f32) -> bool {
+        let side = |p: Vec3| a.0 * p.x + a.1 * p.z > c;
+        let all = (
+            points.iter().any(|&p| side(p)),
+            points.iter().any(|&p| !side(p)),
+        );
+        let seen = (
+            probes.iter().any(|&j| side(points[j as usize])),
+            probes.iter().any(|&j| !side(points[j as usize])),
+        );
+        all.0 && all.1 && !(seen.0 && seen.1)
+    }
+
+    /// On tiles of 8 × 8 samples (flat, and tilted with perspective-like spacing), the 16
+    /// spread probes include the corners, are distinct, and no line across the tile splits its
+    /// samples without splitting the probes (2000 random lines each). The probes the rays were
+    /// first shared from, every fourth sample in scan order (columns 0 and 4), miss such
+    /// splits: the test checks that it can tell the two apart.
+    #[test]
+    fn spread_probes_see_every_straight_split() {
+        let mut rng = Rng::keyed(26, 1, 0);
+        for tilt in [0.0f32, 0.3, 0.8] {
+            // Pixel (x, y) of the tile at a world point on a plane; the spacing grows with y.
+            let points: Vec<Vec3> = (0..64)
+                .map(|j| {
+                    let (x, y) = ((j % 8) as f32, (j / 8) as f32);
+                    let z = y * (1.0 + tilt * y / 8.0);
+                    Vec3::new(x * (1.0 + tilt * y / 8.0), tilt * z, z)
+                })
+                .collect();
+            let (mut reach, mut probes) = (Vec::new(), Vec::new());
+            spread_probes(64, |j| points[j], 16, &mut reach, &mut probes);
+            assert_eq!(probes.len(), 16);
+            for corner in [0, 7, 56, 63] {
+                assert!(
+                    probes.contains(&corner),
+                    "tilt {tilt}: corner {corner} not a probe"
+                );
+            }
+            let mut distinct = probes.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            assert_eq!(distinct.len(), 16, "tilt {tilt}: a probe picked twice");
+            let scan: Vec<u32> = (0..16).map(|r| r * 4).collect();
+            let mut scan_missed = 0;
+            for _ in 0..2000 {
+                let angle = rng.f32() * std::f32::consts::TAU;
+                let a = (angle.cos(), angle.sin());
+                let p = points[(rng.f32() * 64.0) as usize % 64];
+                let c = a.0 * p.x + a.1 * p.z + (rng.f32() - 0.5);
+                assert!(
+                    !split_unseen(&points, &probes, a, c),
+                    "tilt {tilt}: a line splits the samples but not the probes"
+                );
+                scan_missed += usize::from(split_unseen(&points, &scan, a, c));
+            }
+            assert!(
+                scan_missed > 0,
+                "tilt {tilt}: the test cannot tell the probes apart"
+            );
+        }
+        // Coincident samples: only distinct positions are picked.
+        let points = [Vec3::ZERO, Vec3::ZERO, Vec3::X, Vec3::X];
+        let (mut reach, mut probes) = (Vec::new(), Vec::new());
+        spread_probes(4, |j| points[j], 16, &mut reach, &mut probes);
+        assert_eq!(probes, vec![0, 2]);
+    }
 
     /// The traced values `plan_rays` selects in chunks are exactly those of sorting all of them
     /// (the same nodes in the same order), and the untraced rest is their sum up to f32
