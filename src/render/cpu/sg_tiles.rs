@@ -541,12 +541,15 @@ struct RayScratch {
 }
 
 /// Up to `m` of the group's `n` samples (at positions `pos(j)`), spread over it, whose
-/// shadow rays stand for the group's ([`Ctx::traced_group`]): farthest-point sampling over the
-/// positions, starting from the sample farthest from their centroid (ties to the lower index,
-/// so the choice is deterministic). On a flat tile the first four are its corners, so a shadow
-/// edge that is straight across the tile cannot leave every probe on one side of it (a
-/// half-plane that holds any sample holds a vertex of their convex hull); the rest fill the
-/// largest gaps. A sample at the position of an earlier probe is never picked.
+/// shadow rays stand for the group's ([`Ctx::traced_group`]). The first are the group's
+/// extremes: the sample farthest from the centroid, then the samples extreme along eight
+/// directions, 45° apart, in the plane of the group's two widest spreads. A half-plane that
+/// holds any sample holds a vertex of their convex hull, and on a tile (a quadrilateral of
+/// samples, flat or seen in perspective) these extremes are its corners, so a shadow edge
+/// that is straight across the tile cannot leave every probe on one side of it. The rest
+/// fill the largest gaps by farthest-point sampling. Ties go to the lower index, so the
+/// choice is deterministic, and a sample at the position of an earlier probe is never
+/// picked.
 fn spread_probes(
     n: usize,
     pos: impl Fn(usize) -> Vec3,
@@ -559,29 +562,53 @@ fn spread_probes(
     if n == 0 || m == 0 {
         return;
     }
-    let centroid = (0..n).map(&pos).sum::<Vec3>() / n as f32;
-    reach.extend((0..n).map(|j| pos(j).distance_squared(centroid)));
-    loop {
-        // The sample farthest from the probes so far (from the centroid, for the first).
-        let (mut next, mut far) = (0, reach[0]);
-        for (j, &d) in reach.iter().enumerate().skip(1) {
-            if d > far {
-                (next, far) = (j, d);
+    // The lowest index where `key` is largest.
+    let argmax = |key: &dyn Fn(usize) -> f32| {
+        let (mut best, mut top) = (0, key(0));
+        for j in 1..n {
+            let k = key(j);
+            if k > top {
+                (best, top) = (j, k);
             }
         }
-        if !probes.is_empty() && far <= 0.0 {
-            return;
+        best
+    };
+    let centroid = (0..n).map(&pos).sum::<Vec3>() / n as f32;
+    let first = argmax(&|j| pos(j).distance_squared(centroid));
+    let e1 = (pos(first) - centroid).normalize_or_zero();
+    let off_axis = |j: usize| {
+        let d = pos(j) - centroid;
+        d - e1 * e1.dot(d)
+    };
+    let e2 = off_axis(argmax(&|j| off_axis(j).length_squared())).normalize_or_zero();
+    // `reach[j]`: sample j's squared distance to the nearest probe so far.
+    let anchor = pos(first);
+    reach.extend((0..n).map(|j| pos(j).distance_squared(anchor)));
+    probes.push(first as u32);
+    let add = |j: usize, reach: &mut [f32], probes: &mut Vec<u32>| {
+        probes.push(j as u32);
+        let p = pos(j);
+        for (i, d) in reach.iter_mut().enumerate() {
+            *d = d.min(pos(i).distance_squared(p));
         }
-        probes.push(next as u32);
+    };
+    for k in 0..8 {
         if probes.len() == m {
             return;
         }
-        let p = pos(next);
-        let first = probes.len() == 1;
-        for (j, d) in reach.iter_mut().enumerate() {
-            let to = pos(j).distance_squared(p);
-            *d = if first { to } else { d.min(to) };
+        let (s, c) = (k as f32 * std::f32::consts::FRAC_PI_4).sin_cos();
+        let dir = e1 * c + e2 * s;
+        let j = argmax(&|j| dir.dot(pos(j) - centroid));
+        if reach[j] > 0.0 {
+            add(j, reach, probes);
         }
+    }
+    while probes.len() < m {
+        let j = argmax(&|j| reach[j]);
+        if reach[j] <= 0.0 {
+            return;
+        }
+        add(j, reach, probes);
     }
 }
 
@@ -606,36 +633,49 @@ mod tests {
         all.0 && all.1 && !(seen.0 && seen.1)
     }
 
-    /// On tiles of 8 × 8 samples (flat, and tilted with perspective-like spacing), the 16
-    /// spread probes include the corners, are distinct, and no line across the tile splits its
-    /// samples without splitting the probes (2000 random lines each). The probes the rays were
-    /// first shared from, every fourth sample in scan order (columns 0 and 4), miss such
-    /// splits: the test checks that it can tell the two apart.
+    /// On tiles of 8 × 8 samples (flat, tilted with perspective-like spacing, and stretched
+    /// and turned in a sloping plane), the 16 spread probes include the tile's corners, are
+    /// distinct, and no line across the tile splits its samples without splitting the probes
+    /// (2000 random lines each). The probes the rays were first shared from, every fourth
+    /// sample in scan order (columns 0 and 4), miss such splits: the test checks that it can
+    /// tell the two apart.
     #[test]
     fn spread_probes_see_every_straight_split() {
         let mut rng = Rng::keyed(26, 1, 0);
-        for tilt in [0.0f32, 0.3, 0.8] {
-            // Pixel (x, y) of the tile at a world point on a plane; the spacing grows with y.
+        // Pixel (x, y) of the tile at a world point on a plane: `tilt` slopes the plane and
+        // makes the spacing grow with y (a plane seen in perspective); `turn` stretches x
+        // three times and turns the tile in a plane that slopes with x.
+        let tiles = [(0.0f32, None), (0.3, None), (0.8, None), (2.0, None)]
+            .into_iter()
+            .chain([0.1f32, 0.7, 1.3].map(|a| (0.0, Some(a))));
+        for (tilt, turn) in tiles {
             let points: Vec<Vec3> = (0..64)
                 .map(|j| {
                     let (x, y) = ((j % 8) as f32, (j / 8) as f32);
-                    let z = y * (1.0 + tilt * y / 8.0);
-                    Vec3::new(x * (1.0 + tilt * y / 8.0), tilt * z, z)
+                    if let Some(a) = turn {
+                        let (s, c) = a.sin_cos();
+                        return Vec3::new(3.0 * x * c - y * s, 0.5 * x, 3.0 * x * s + y * c);
+                    }
+                    // A homography of the pixel grid, as a camera sees a plane: lines stay
+                    // lines and the spacing grows with y.
+                    let w = 1.0 - tilt * y / 20.0;
+                    Vec3::new(x / w, tilt * y / w, y / w)
                 })
                 .collect();
+            let name = format!("tilt {tilt}, turn {turn:?}");
             let (mut reach, mut probes) = (Vec::new(), Vec::new());
             spread_probes(64, |j| points[j], 16, &mut reach, &mut probes);
             assert_eq!(probes.len(), 16);
             for corner in [0, 7, 56, 63] {
                 assert!(
                     probes.contains(&corner),
-                    "tilt {tilt}: corner {corner} not a probe"
+                    "{name}: corner {corner} not a probe"
                 );
             }
             let mut distinct = probes.clone();
             distinct.sort_unstable();
             distinct.dedup();
-            assert_eq!(distinct.len(), 16, "tilt {tilt}: a probe picked twice");
+            assert_eq!(distinct.len(), 16, "{name}: a probe picked twice");
             let scan: Vec<u32> = (0..16).map(|r| r * 4).collect();
             let mut scan_missed = 0;
             for _ in 0..2000 {
@@ -645,13 +685,13 @@ mod tests {
                 let c = a.0 * p.x + a.1 * p.z + (rng.f32() - 0.5);
                 assert!(
                     !split_unseen(&points, &probes, a, c),
-                    "tilt {tilt}: a line splits the samples but not the probes"
+                    "{name}: a line splits the samples but not the probes"
                 );
                 scan_missed += usize::from(split_unseen(&points, &scan, a, c));
             }
             assert!(
                 scan_missed > 0,
-                "tilt {tilt}: the test cannot tell the probes apart"
+                "{name}: the test cannot tell the probes apart"
             );
         }
         // Coincident samples: only distinct positions are picked.
