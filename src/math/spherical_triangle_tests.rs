@@ -715,6 +715,96 @@ fn kernel_matches_f64_on_the_benchmark_table() {
     }
 }
 
+/// The subdivided rule (wide lobes, λ < `FAR_MIN_SHARPNESS`, over triangles reaching beyond 90°
+/// from the axis) with one subdivision, which the kernel takes when every such lane of a vector is
+/// at most `SUBDIVIDED_ONCE_CHORD` wide, keeps the contract against the f64 cubature (1 % where
+/// the triangle holds ≥ 1 % of the lobe, else 1e-4 of the lobe's integral). Each problem runs
+/// alone (every lane a copy: one subdivision) and beside a wider one (two subdivisions), so
+/// both piece counts are measured on the same problems; the worst errors are printed.
+#[test]
+fn kernel_subdivided_rule_once_meets_the_contract() {
+    use crate::sg::kernel::triangle::{
+        FAR_MIN_SHARPNESS, SUBDIVIDED_MAX_CHORD, SUBDIVIDED_ONCE_CHORD, prepare,
+    };
+    let s3 = crate::sg::kernel::v3::V3::<f32>::splat;
+    let p = DVec3::Z;
+    let mut cases = Vec::new();
+    for lam in [0.3, 1.0, 3.0, 6.0, 9.0, 11.9] {
+        for theta in [60.0f64, 80.0, 95.0, 110.0, 140.0] {
+            for r in [0.2, 0.3, 0.42] {
+                for (k, spin) in [0.0, 1.0].into_iter().enumerate() {
+                    let c = offset(p, spin, theta.to_radians());
+                    // An equilateral triangle (k = 0) or a stretched one (k = 1) around c.
+                    let s = [r, r * (1.0 - 0.5 * k as f64), r];
+                    let tri = [0, 1, 2]
+                        .map(|i| offset(c, spin + 2.0 * PI * i as f64 / 3.0, s[i]).as_vec3());
+                    cases.push((p.as_vec3(), lam as f32, tri[0], tri[1], tri[2]));
+                }
+            }
+        }
+    }
+    // The problems that take the rule, and narrow enough for one subdivision.
+    let cases: Vec<_> = cases
+        .into_iter()
+        .filter(|&(p, l, a, b, c)| {
+            let q = prepare::<f32>(s3(p), l, s3(a), s3(b), s3(c));
+            let chord = (a - b).length().max((b - c).length()).max((c - a).length());
+            q.far_weak && chord <= SUBDIVIDED_ONCE_CHORD
+        })
+        .collect();
+    assert!(
+        cases.len() >= 50,
+        "only {} cases take the rule",
+        cases.len()
+    );
+    // A wide companion that takes the rule with two subdivisions.
+    let wc = offset(p, 0.5, 100f64.to_radians());
+    let wide = [0, 1, 2].map(|i| offset(wc, 2.0 * PI * i as f64 / 3.0, 0.6).as_vec3());
+    let wide = (p.as_vec3(), 5.0f32, wide[0], wide[1], wide[2]);
+    {
+        let (p, l, a, b, c) = wide;
+        let chord = (a - b).length().max((b - c).length()).max((c - a).length());
+        let q = prepare::<f32>(s3(p), l, s3(a), s3(b), s3(c));
+        assert!(q.far_weak && chord > SUBDIVIDED_ONCE_CHORD && chord <= SUBDIVIDED_MAX_CHORD);
+        assert!(l < FAR_MIN_SHARPNESS);
+    }
+    for isa in crate::sg::kernel::Isa::all_available() {
+        let (mut worst_once, mut worst_twice) = (0.0f64, 0.0f64);
+        for &case in &cases {
+            let (p, l, a, b, c) = case;
+            let r = reference_triangle(
+                p.as_dvec3().normalize(),
+                f64::from(l),
+                a.as_dvec3().normalize(),
+                b.as_dvec3().normalize(),
+                c.as_dvec3().normalize(),
+                1e-11,
+            );
+            let lobe = super::super::sg::lobe_integral_f64(f64::from(l));
+            let tol = if r >= 0.01 * lobe {
+                0.01 * r
+            } else {
+                1e-4 * lobe
+            };
+            let once = kernel_values(isa, &[case])[0];
+            let twice = kernel_values(isa, &[case, wide])[0];
+            assert!(
+                (once - r).abs() <= tol,
+                "{isa:?}: λ {l}: one subdivision {once}, reference {r}"
+            );
+            if r >= 0.01 * lobe {
+                worst_once = worst_once.max((once - r).abs() / r);
+                worst_twice = worst_twice.max((twice - r).abs() / r);
+            }
+        }
+        eprintln!(
+            "subdivided rule {isa:?}, {} problems: worst relative error {worst_once:.2e} \
+             (4 pieces), {worst_twice:.2e} (16 pieces where the lanes hold both problems)",
+            cases.len()
+        );
+    }
+}
+
 /// Degenerate inputs through the kernel: zero-area triangles, a vertex at the axis, the axis on
 /// an edge, zero vertices, λ = 0 and huge λ, non-finite input: finite, ≥ 0, ≤ Ω (+ f32 rounding
 /// of Ω itself, 1e-5 relative) and, where the f64 routine is exact (λ = 0: the solid angle), equal

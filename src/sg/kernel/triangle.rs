@@ -39,6 +39,11 @@ pub const FAR_MIN_SHARPNESS: f32 = 12.0;
 /// Wider triangles (longest chord between unit vertices) that need [`subdivided`] fall back to
 /// the scalar routine: its 16 pieces would be too wide for the 7-point rule.
 pub const SUBDIVIDED_MAX_CHORD: f32 = 1.5;
+/// Triangles at most this wide (longest chord between unit vertices) take [`subdivided`] with
+/// one subdivision: half of [`SUBDIVIDED_MAX_CHORD`], so that their 4 pieces are about as wide as
+/// the 16 of the widest triangle the rule takes (measured by
+/// `kernel_subdivided_rule_once_meets_the_contract`).
+pub const SUBDIVIDED_ONCE_CHORD: f32 = 0.5 * SUBDIVIDED_MAX_CHORD;
 /// Edges whose nearest point is more than this many lobe widths² away (λ x0 > 12: e^{−12} =
 /// 6e-6) take h = 1/λ along their whole arc, with no quadrature, when every lane's does.
 const Y_CLOSED: f32 = 12.0;
@@ -241,20 +246,32 @@ fn small<V: Vf>(p: V3<V>, lam: V, a: V3<V>, e1: V3<V>, e2: V3<V>, det_abs: V) ->
 /// The 7-point rule on each of the 16 spherical triangles of two midpoint subdivisions of the
 /// triangle of unit vertices `a`, `b`, `c` (geodesic midpoints: the pieces partition the
 /// spherical triangle exactly), for wide lobes (λ < [`FAR_MIN_SHARPNESS`]) over triangles that
-/// reach beyond 90° from the axis.
+/// reach beyond 90° from the axis; with `once`, the 4 triangles of one subdivision (for
+/// triangles at most [`SUBDIVIDED_ONCE_CHORD`] wide, whose 4 pieces are no wider than the 16 of
+/// the widest triangle this rule takes).
 #[inline(always)]
-fn subdivided<V: Vf>(p: V3<V>, lam: V, a: V3<V>, b: V3<V>, c: V3<V>) -> V {
+fn subdivided<V: Vf>(p: V3<V>, lam: V, a: V3<V>, b: V3<V>, c: V3<V>, once: bool) -> V {
     let mut acc = V::splat(0.0);
     let (ab, bc, ca) = (midpoint(a, b), midpoint(b, c), midpoint(c, a));
     for [x, y, z] in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+        if once {
+            acc = acc + flat_piece(p, lam, x, y, z);
+            continue;
+        }
         let (xy, yz, zx) = (midpoint(x, y), midpoint(y, z), midpoint(z, x));
         for [u, v, w] in [[x, xy, zx], [xy, y, yz], [zx, yz, z], [xy, yz, zx]] {
-            let (e1, e2) = ((v - u), (w - u));
-            let det = u.dot(e1.cross(e2)).abs();
-            acc = acc + small(p, lam, u, e1, e2, det);
+            acc = acc + flat_piece(p, lam, u, v, w);
         }
     }
     acc
+}
+
+/// The 7-point rule over the flat triangle through the unit vertices `u`, `v`, `w`.
+#[inline(always)]
+fn flat_piece<V: Vf>(p: V3<V>, lam: V, u: V3<V>, v: V3<V>, w: V3<V>) -> V {
+    let (e1, e2) = ((v - u), (w - u));
+    let det = u.dot(e1.cross(e2)).abs();
+    small(p, lam, u, e1, e2, det)
 }
 
 /// The geodesic midpoint of unit vectors x and y.
@@ -405,7 +422,10 @@ pub fn finish<V: Vf>(q: &Prepared<V>) -> TriangleSg<V> {
         value = small(p, lam, base, e1, e2, det);
     }
     if V::any(q.far_weak) {
-        value = V::select(q.far_weak, subdivided(p, lam, q.a, q.b, q.c), value);
+        // One subdivision (28 exponentials, not 112) when every lane that takes the rule is
+        // narrow enough for it.
+        let once = V::all(!q.far_weak | q.chord.le(V::splat(SUBDIVIDED_ONCE_CHORD)));
+        value = V::select(q.far_weak, subdivided(p, lam, q.a, q.b, q.c, once), value);
     }
     if V::any(q.edges) {
         let (ea, _, ma) = edge(p, lam, inv_lam, q.a, q.b, q.n[0]);
