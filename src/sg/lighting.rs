@@ -157,7 +157,7 @@ impl Default for NodeLobe {
 }
 
 impl LitNode {
-    fn from_triangle(t: &LitTriangle, pos: u32) -> LitNode {
+    pub(crate) fn from_triangle(t: &LitTriangle, pos: u32) -> LitNode {
         let mut n = LitNode {
             rep: pos,
             ..LitNode::default()
@@ -202,7 +202,7 @@ impl LitNode {
         n
     }
 
-    fn merge(a: &LitNode, b: &LitNode) -> LitNode {
+    pub(crate) fn merge(a: &LitNode, b: &LitNode) -> LitNode {
         let mut lobes = [NodeLobe::default(); MAX_LOBES];
         for (k, l) in lobes.iter_mut().enumerate() {
             let (x, y) = (&a.lobes[k], &b.lobes[k]);
