@@ -679,6 +679,22 @@ fn kernel_meets_accuracy_bar_with_every_isa() {
     }
 }
 
+/// The f64 cubature's value of one kernel problem and the contract's tolerance there: 1 % where
+/// the triangle holds ≥ 1 % of the lobe (`relative`), else 1e-4 of the lobe's integral.
+fn contract_reference(p: Vec3, l: f32, a: Vec3, b: Vec3, c: Vec3) -> (f64, f64, bool) {
+    let r = reference_triangle(
+        p.as_dvec3().normalize(),
+        f64::from(l),
+        a.as_dvec3().normalize(),
+        b.as_dvec3().normalize(),
+        c.as_dvec3().normalize(),
+        1e-11,
+    );
+    let lobe = super::super::sg::lobe_integral_f64(f64::from(l));
+    let relative = r >= 0.01 * lobe;
+    (r, if relative { 0.01 * r } else { 1e-4 * lobe }, relative)
+}
+
 /// The kernel on the benchmark table against the default f64 routine: within 1 % where the
 /// triangle holds ≥ 1 % of the lobe (the contract), and within 1e-4 of the lobe's integral
 /// elsewhere (the same absolute floor as the random-configuration test).
@@ -689,25 +705,12 @@ fn kernel_matches_f64_on_the_benchmark_table() {
         let got = kernel_values(isa, &table);
         let mut worst = 0.0f64;
         for (&(p, l, a, b, c), g) in table.iter().zip(&got) {
-            let r = reference_triangle(
-                p.as_dvec3().normalize(),
-                f64::from(l),
-                a.as_dvec3().normalize(),
-                b.as_dvec3().normalize(),
-                c.as_dvec3().normalize(),
-                1e-11,
-            );
-            let lobe = super::super::sg::lobe_integral_f64(f64::from(l));
-            let tol = if r >= 0.01 * lobe {
-                0.01 * r
-            } else {
-                1e-4 * lobe
-            };
+            let (r, tol, relative) = contract_reference(p, l, a, b, c);
             assert!(
                 (g - r).abs() <= tol,
                 "{isa:?}: λ {l}: kernel {g} reference {r}"
             );
-            if r >= 0.01 * lobe {
+            if relative {
                 worst = worst.max((g - r).abs() / r);
             }
         }
@@ -727,6 +730,9 @@ fn kernel_subdivided_rule_once_meets_the_contract() {
         FAR_MIN_SHARPNESS, SUBDIVIDED_MAX_CHORD, SUBDIVIDED_ONCE_CHORD, prepare,
     };
     let s3 = crate::sg::kernel::v3::V3::<f32>::splat;
+    // The longest chord between the (unit) vertices, as the kernel measures a triangle's width.
+    let chord =
+        |a: Vec3, b: Vec3, c: Vec3| (a - b).length().max((b - c).length()).max((c - a).length());
     let p = DVec3::Z;
     let mut cases = Vec::new();
     for lam in [0.3, 1.0, 3.0, 6.0, 9.0, 11.9] {
@@ -747,9 +753,8 @@ fn kernel_subdivided_rule_once_meets_the_contract() {
     let cases: Vec<_> = cases
         .into_iter()
         .filter(|&(p, l, a, b, c)| {
-            let q = prepare::<f32>(s3(p), l, s3(a), s3(b), s3(c));
-            let chord = (a - b).length().max((b - c).length()).max((c - a).length());
-            q.far_weak && chord <= SUBDIVIDED_ONCE_CHORD
+            prepare::<f32>(s3(p), l, s3(a), s3(b), s3(c)).far_weak
+                && chord(a, b, c) <= SUBDIVIDED_ONCE_CHORD
         })
         .collect();
     assert!(
@@ -763,36 +768,23 @@ fn kernel_subdivided_rule_once_meets_the_contract() {
     let wide = (p.as_vec3(), 5.0f32, wide[0], wide[1], wide[2]);
     {
         let (p, l, a, b, c) = wide;
-        let chord = (a - b).length().max((b - c).length()).max((c - a).length());
+        let w = chord(a, b, c);
         let q = prepare::<f32>(s3(p), l, s3(a), s3(b), s3(c));
-        assert!(q.far_weak && chord > SUBDIVIDED_ONCE_CHORD && chord <= SUBDIVIDED_MAX_CHORD);
+        assert!(q.far_weak && w > SUBDIVIDED_ONCE_CHORD && w <= SUBDIVIDED_MAX_CHORD);
         assert!(l < FAR_MIN_SHARPNESS);
     }
     for isa in crate::sg::kernel::Isa::all_available() {
         let (mut worst_once, mut worst_twice) = (0.0f64, 0.0f64);
         for &case in &cases {
             let (p, l, a, b, c) = case;
-            let r = reference_triangle(
-                p.as_dvec3().normalize(),
-                f64::from(l),
-                a.as_dvec3().normalize(),
-                b.as_dvec3().normalize(),
-                c.as_dvec3().normalize(),
-                1e-11,
-            );
-            let lobe = super::super::sg::lobe_integral_f64(f64::from(l));
-            let tol = if r >= 0.01 * lobe {
-                0.01 * r
-            } else {
-                1e-4 * lobe
-            };
+            let (r, tol, relative) = contract_reference(p, l, a, b, c);
             let once = kernel_values(isa, &[case])[0];
             let twice = kernel_values(isa, &[case, wide])[0];
             assert!(
                 (once - r).abs() <= tol,
                 "{isa:?}: λ {l}: one subdivision {once}, reference {r}"
             );
-            if r >= 0.01 * lobe {
+            if relative {
                 worst_once = worst_once.max((once - r).abs() / r);
                 worst_twice = worst_twice.max((twice - r).abs() / r);
             }

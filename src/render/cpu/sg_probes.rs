@@ -396,64 +396,12 @@ fn cut_probe() {
                     let cell = |t: f32| (((t / m.max(1e-20) + 1.0) * 0.5 * r as f32) as usize).min(r - 1);
                     (f * r + cell(u)) * r + cell(v)
                 };
-                // Per triangle with its own box and normal (the tightest bound of this form),
-                // and the same with each lobe's term capped by its integral over the sphere
-                // (hmax μ 2π/λ, λ the lobe's smallest sharpness).
-                {
-                    let (mut s1, mut s2, mut se) = (0.0f64, 0.0f64, 0.0f64);
-                    for e in cut.iter() {
-                        let n = &lit.tree.nodes[e.node as usize];
-                        if n.is_leaf() {
-                            continue;
-                        }
-                        let (s0, k) = (n.first as usize, n.count as usize);
-                        for pos in s0..s0 + k {
-                            let t = &lit.tris[pos];
-                            let Some(sg) = &t.sg else { continue };
-                            let ln = crate::sg::LitNode::from_triangle(t, pos as u32);
-                            if !(ln.weight > 0.0) {
-                                continue;
-                            }
-                            let [a, b, c] = t.vertices;
-                            let tn = crate::sg::tree::Node {
-                                bbox_min: a.min(b).min(c),
-                                bbox_max: a.max(b).max(c),
-                                cone: Some(crate::sg::tree::NormalCone { axis: sg.normal, half_angle: 0.0 }),
-                                ..*n
-                            };
-                            let b1 = lum(crate::sg::node_bound(&tn, &ln, sp.p, &rx));
-                            s1 += b1;
-                            // Each lobe's term alone (its bin, its falloff), then capped by
-                            // the lobe's integral over the sphere, μ f hmax 2π/λ, taking
-                            // cos_max = 1 (an estimate of what such a cap could reach).
-                            let d2 = (sp.p.clamp(tn.bbox_min, tn.bbox_max) - sp.p).length_squared() as f64;
-                            let widest = if sg.half_vector { sg.light_cosine().clamp(0.0, 1.0) } else { 1.0 };
-                            let mut l0 = ln;
-                            l0.peak_by_sharpness = [Vec3::ZERO; 6];
-                            let mut b2 = lum(crate::sg::node_bound(&tn, &l0, sp.p, &rx));
-                            for l in sg.lobes() {
-                                let lam = l.sharpness.max(0.0) * widest;
-                                let bin = crate::sg::SHARPNESS_BINS.iter().rposition(|&e| lam >= e).unwrap_or(0);
-                                let mut lk = l0;
-                                lk.diffuse = Vec3::ZERO;
-                                lk.peak_by_sharpness[bin] = l.amplitude * ln.area;
-                                let bk = lum(crate::sg::node_bound(&tn, &lk, sp.p, &rx));
-                                let cap = bk / f64::from(ln.area).max(1e-30) * d2 * std::f64::consts::TAU / f64::from(lam).max(1e-6);
-                                b2 += bk.min(cap);
-                            }
-                            s2 += b2;
-                        }
-                        se += lum(leaf[s0..s0 + k].iter().fold(Vec3::ZERO, |a, l| a + l.0));
-                    }
-                    println!(
-                        "  per triangle, own box: Σ bound {s1:.4}, capped by 2π/λ {s2:.4}, Σ exact {se:.4}: ratios {:.1}, {:.1}",
-                        s1 / se.max(1e-30),
-                        s2 / se.max(1e-30)
-                    );
-                }
-                // The receiver's cosine bounded over the cone to the node's (or the
-                // triangle's) bounding sphere, cos(max(0, angle(n_x, dir) − half)), which the
-                // bound takes as 1; and how often the leaves' computed sum exceeds it.
+                // Per triangle with its own box and normal (the tightest bound of this form);
+                // the same with each lobe's term capped by its integral over the sphere (hmax μ
+                // 2π/λ, λ the lobe's smallest sharpness); and the receiver's cosine bounded over
+                // the cone to the node's (or the triangle's) bounding sphere, cos(max(0,
+                // angle(n_x, dir) − half)), which the bound takes as 1, with how often the
+                // leaves' computed sum exceeds it.
                 {
                     let rx_cos = |lo: Vec3, hi: Vec3| {
                         let to_c = 0.5 * (lo + hi) - sp.p;
@@ -466,7 +414,10 @@ fn cut_probe() {
                             1.0
                         }
                     };
-                    let (mut sb, mut st, mut se, mut over) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+                    // Σ own-box bound, capped, times the cosine; Σ node bound times the
+                    // cosine; Σ exact; nodes over the cosine bound.
+                    let (mut s1, mut s2, mut st, mut sb, mut se, mut over) =
+                        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
                     for e in cut.iter() {
                         let n = &lit.tree.nodes[e.node as usize];
                         if n.is_leaf() {
@@ -498,6 +449,26 @@ fn cut_probe() {
                                 ..*n
                             };
                             let bt = lum(crate::sg::node_bound(&tn, &ln, sp.p, &rx));
+                            s1 += bt;
+                            // Each lobe's term alone (its bin, its falloff), then capped by
+                            // the lobe's integral over the sphere, μ f hmax 2π/λ, taking
+                            // cos_max = 1 (an estimate of what such a cap could reach).
+                            let d2 = f64::from((sp.p.clamp(tn.bbox_min, tn.bbox_max) - sp.p).length_squared());
+                            let widest = if sg.half_vector { sg.light_cosine().clamp(0.0, 1.0) } else { 1.0 };
+                            let mut l0 = ln;
+                            l0.peak_by_sharpness = [Vec3::ZERO; 6];
+                            let mut b2 = lum(crate::sg::node_bound(&tn, &l0, sp.p, &rx));
+                            for l in sg.lobes() {
+                                let lam = l.sharpness.max(0.0) * widest;
+                                let bin = crate::sg::SHARPNESS_BINS.iter().rposition(|&e| lam >= e).unwrap_or(0);
+                                let mut lk = l0;
+                                lk.diffuse = Vec3::ZERO;
+                                lk.peak_by_sharpness[bin] = l.amplitude * ln.area;
+                                let bk = lum(crate::sg::node_bound(&tn, &lk, sp.p, &rx));
+                                let cap = bk / f64::from(ln.area).max(1e-30) * d2 * std::f64::consts::TAU / f64::from(lam).max(1e-6);
+                                b2 += bk.min(cap);
+                            }
+                            s2 += b2;
                             let ct = rx_cos(tn.bbox_min, tn.bbox_max);
                             st += bt * ct;
                             // A triangle whose computed value exceeds its own bound times the
@@ -513,6 +484,11 @@ fn cut_probe() {
                             }
                         }
                     }
+                    println!(
+                        "  per triangle, own box: Σ bound {s1:.4}, capped by 2π/λ {s2:.4}, Σ exact {se:.4}: ratios {:.1}, {:.1}",
+                        s1 / se.max(1e-30),
+                        s2 / se.max(1e-30)
+                    );
                     println!(
                         "  with the receiver's cosine: inner nodes' Σ bound {sb:.4} (per triangle {st:.4}), Σ exact {se:.4}: ratios {:.1}, {:.1}; nodes whose leaves' sum exceeds it: {over}",
                         sb / se.max(1e-30),
