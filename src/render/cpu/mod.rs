@@ -7,6 +7,7 @@ pub mod prt;
 pub mod reference;
 pub mod reflectors;
 pub mod sg;
+mod sg_sparse;
 mod sg_tiles;
 pub mod surface;
 pub mod vpl;

@@ -661,7 +661,15 @@ fn shade_frame(
             .iter()
             .all(|l| l.receiver == ReceiverOptions::default());
     let tile_indirect = if tiled {
-        Some(ctx.tile_indirect(&hits, &tally, progress)?)
+        Some(match super::sg_sparse::sparse_agree() {
+            Some(agree) => ctx.sparse_tile_indirect(&hits, &tally, progress, agree)?,
+            None => ctx.tile_indirect(
+                &hits,
+                super::sg_tiles::tile_side(opts.spp),
+                &tally,
+                progress,
+            )?,
+        })
     } else {
         // The pass sg_work_units counts for tile cuts, done at once.
         if opts.mode == CutMode::Tile {

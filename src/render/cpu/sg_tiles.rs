@@ -89,24 +89,26 @@ struct Pass<'p> {
 }
 
 /// One receiver sample of a tile.
-struct Sample {
+pub(super) struct Sample {
     /// Index into the frame's samples (pixel × spp + s).
     index: usize,
-    material: (u32, usize),
-    x: Vec3,
+    /// Material index and the receiver's lobe count (0: diffuse only).
+    pub(super) material: (u32, usize),
+    pub(super) x: Vec3,
     xo: Vec3,
-    rx: ReceiverLobes,
+    pub(super) rx: ReceiverLobes,
 }
 
 /// What a tile returns: per receiver sample, its index, indirect light and cut size.
 type TileOut = Vec<(usize, Vec3, f32)>;
 
 impl Ctx<'_> {
-    /// The indirect light of every sample (`hits`) with tile cuts, and each sample's cut size
-    /// (summed over the lights). `None` when cancelled.
+    /// The indirect light of every sample (`hits`) with tile cuts of `side` pixels, and each
+    /// sample's cut size (summed over the lights). `None` when cancelled.
     pub(super) fn tile_indirect(
         &self,
         hits: &[Option<Hit>],
+        side: usize,
         tally: &Tally,
         progress: &Progress,
     ) -> Option<(Vec<Vec3>, Vec<f32>)> {
@@ -121,7 +123,6 @@ impl Ctx<'_> {
         };
         let (w, h) = (self.opts.width as usize, self.opts.height as usize);
         let spp = self.opts.spp as usize;
-        let side = tile_side(self.opts.spp);
         let (tx, ty) = (w.div_ceil(side), h.div_ceil(side));
         let tiles: Vec<TileOut> = (0..tx * ty)
             .into_par_iter()
@@ -180,7 +181,7 @@ impl Ctx<'_> {
     }
 
     /// A sample's receiver data, when it receives indirect light.
-    fn receiver_sample(&self, hit: Option<&Hit>, index: usize) -> Option<Sample> {
+    pub(super) fn receiver_sample(&self, hit: Option<&Hit>, index: usize) -> Option<Sample> {
         let hit = hit?;
         if !self.scene.tri_object(hit.tri).receiver {
             return None;
