@@ -1,5 +1,5 @@
-//! Diffuse receivers shaded on a sparse lattice (`docs/sg-performance.md`, "Diffuse receivers
-//! interpolated"): with tile cuts, a diffuse-only receiver sample (no glossy lobe, so its
+//! Diffuse receivers shaded on a sparse lattice (`docs/sg-performance.md`, "Tried, kept as a
+//! knob: diffuse receivers interpolated"): with tile cuts, a diffuse-only receiver sample (no glossy lobe, so its
 //! indirect light does not depend on the view) at a pixel off the even lattice (x and y both
 //! even) takes the mean of its lattice neighbours' values of the same sample number, when every
 //! neighbour is a diffuse-only sample of the same material on the same plane (normals within
@@ -29,8 +29,8 @@ pub const AGREE: f32 = 0.1;
 
 /// The sparse pass's tolerance on the neighbours' agreement, when the environment variable
 /// `INTERREFLECT_SPARSE` asks for the pass (a measurement knob, off by default: measured in
-/// `docs/sg-performance.md`; `INTERREFLECT_SPARSE=on` is [`AGREE`], a number is the tolerance, a negative value or none
-/// turns it off).
+/// `docs/sg-performance.md`). `on` is [`AGREE`], a number is the tolerance; a negative value
+/// or none turns the pass off.
 pub fn sparse_agree() -> Option<f32> {
     let v = std::env::var("INTERREFLECT_SPARSE").ok()?;
     if v == "on" {
