@@ -19,7 +19,7 @@
 
 use crate::accel::Accel;
 use crate::sg::LitScene;
-use crate::visibility::ism::{ImperfectShadowMaps, MapOrigin};
+use crate::visibility::ism::{ImperfectShadowMaps, MapOrigin, MapView};
 use glam::Vec3;
 use std::collections::BinaryHeap;
 
@@ -144,14 +144,24 @@ impl NodeMaps {
     /// bound, or 1 where the map knows nothing (an unlit node, or x below the map's horizon:
     /// the transport itself zeroes receivers behind a piece's plane).
     pub fn visibility(&self, node: u32, x: Vec3) -> f32 {
+        node_map_visibility(self.map(node).as_ref(), x)
+    }
+
+    /// The map that tree node `node` reads, resolved once for many receiver points (`None`:
+    /// the node has none, and every point sees it); [`node_map_visibility`] looks it up.
+    pub fn map(&self, node: u32) -> Option<MapView<'_>> {
         match self.map_of.get(node as usize) {
-            Some(&i) if i != u32::MAX => self
-                .maps
-                .visibility_above_horizon(i as usize, x)
-                .unwrap_or(1.0),
-            _ => 1.0,
+            Some(&i) if i != u32::MAX => Some(self.maps.map(i as usize)),
+            _ => None,
         }
     }
+}
+
+/// [`NodeMaps::visibility`] of a point `x` through the node's resolved map
+/// ([`NodeMaps::map`]).
+#[inline]
+pub fn node_map_visibility(map: Option<&MapView>, x: Vec3) -> f32 {
+    map.map_or(1.0, |m| m.visibility_above_horizon(x).unwrap_or(1.0))
 }
 
 #[cfg(test)]

@@ -186,6 +186,26 @@ impl ImperfectShadowMaps {
         }
     }
 
+    /// Maps from their parts: `res` texels a side, each map's origin and frame, the atlas (map
+    /// after map), the depth bias and one variance floor for all (for tests of the lookups).
+    #[cfg(test)]
+    pub(crate) fn from_parts(
+        res: usize,
+        origins: Vec<(Vec3, Frame)>,
+        atlas: Vec<Vec2>,
+        bias: f32,
+        min_variance: f32,
+    ) -> ImperfectShadowMaps {
+        assert_eq!(atlas.len(), origins.len() * res * res);
+        ImperfectShadowMaps {
+            res,
+            min_variance: vec![min_variance; origins.len()],
+            origins,
+            atlas,
+            bias,
+        }
+    }
+
     /// Maps of the same layout made exactly, by one ray per texel centre through the BVH
     /// (nearest hit, or `far` for a miss), for the visibility maps at tree nodes
     /// (`visibility::node_maps`). Texels beyond the hemisphere's disc take the ray of the
@@ -284,10 +304,64 @@ impl ImperfectShadowMaps {
     /// [`Self::visibility`], or `None` when `p` is below the map's horizon (where it knows
     /// nothing).
     pub fn visibility_above_horizon(&self, i: usize, p: Vec3) -> Option<f32> {
-        let (y, frame) = &self.origins[i];
-        let (u, w, t) = paraboloid(*y, frame, p)?;
+        self.map(i).visibility_above_horizon(p)
+    }
+
+    /// Map `i` resolved once, for many lookups ([`MapView::visibility_above_horizon`] gives
+    /// what [`Self::visibility_above_horizon`] gives for it).
+    pub fn map(&self, i: usize) -> MapView<'_> {
         let n = self.res;
-        let m = bilinear_moments(&self.atlas[i * n * n..(i + 1) * n * n], n, u, w);
+        let (y, frame) = &self.origins[i];
+        MapView {
+            y: *y,
+            frame,
+            moments: &self.atlas[i * n * n..(i + 1) * n * n],
+            res: n,
+            bias: self.bias,
+            min_variance: self.min_variance[i],
+        }
+    }
+}
+
+/// One map of [`ImperfectShadowMaps`], its origin, texels and constants looked up once.
+#[derive(Clone, Copy)]
+pub struct MapView<'a> {
+    y: Vec3,
+    frame: &'a Frame,
+    moments: &'a [Vec2],
+    res: usize,
+    bias: f32,
+    min_variance: f32,
+}
+
+/// A [`MapView`]'s fields, for the lanes' lookup (`sg::kernel::maps`).
+pub(crate) struct MapViewParts<'a> {
+    pub y: Vec3,
+    pub frame: &'a Frame,
+    pub moments: &'a [Vec2],
+    pub res: usize,
+    pub bias: f32,
+    pub min_variance: f32,
+}
+
+impl<'a> MapView<'a> {
+    pub(crate) fn parts(&self) -> MapViewParts<'a> {
+        MapViewParts {
+            y: self.y,
+            frame: self.frame,
+            moments: self.moments,
+            res: self.res,
+            bias: self.bias,
+            min_variance: self.min_variance,
+        }
+    }
+
+    /// The map's visibility of `p`, or `None` below its horizon (where it knows nothing); see
+    /// [`ImperfectShadowMaps::visibility`].
+    #[inline]
+    pub fn visibility_above_horizon(&self, p: Vec3) -> Option<f32> {
+        let (u, w, t) = paraboloid(self.y, self.frame, p)?;
+        let m = bilinear_moments(self.moments, self.res, u, w);
         if !(m.x > 0.0) {
             // No point reached this part of the map: nothing occludes.
             return Some(1.0);
@@ -295,7 +369,7 @@ impl ImperfectShadowMaps {
         Some(chebyshev_upper_bound(
             m,
             t * (1.0 - self.bias),
-            self.min_variance[i],
+            self.min_variance,
         ))
     }
 }

@@ -19,14 +19,14 @@ use crate::precompute::vpl::{self, Vpl};
 use crate::render::{Device, Visibility};
 use crate::scene::{Light, Scene};
 pub use crate::settings::CutMode;
-use crate::sg::node_maps::NodeMaps;
+use crate::sg::node_maps::{NodeMaps, node_map_visibility};
 use crate::sg::transport::receiver::{ReceiverLobes, ReceiverOptions};
 use crate::sg::tree::{self, ReflectorTree};
 use crate::sg::{
     CutCounters, CutEntry, CutOptions, LitScene, LitTriangle, ReflectorPiece, build_tree,
     light_anchor, light_triangles, reflector_pieces,
 };
-use crate::visibility::ism::{ImperfectShadowMaps, nearest_vpl_weights_among};
+use crate::visibility::ism::{ImperfectShadowMaps, MapView, nearest_vpl_weights_among};
 use crate::visibility::vsm::VarianceShadowMap;
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
@@ -666,6 +666,7 @@ fn shade_frame(
             None => ctx.tile_indirect(
                 &hits,
                 super::sg_tiles::tile_side(opts.spp),
+                &ctx.tile_summaries(),
                 &tally,
                 progress,
             )?,
@@ -1084,9 +1085,34 @@ impl ApproxVisibility {
 
     /// Visibility of tree node `node` from receiver point `x`.
     pub(super) fn node(&self, node: u32, x: Vec3) -> f32 {
+        self.node_view(node).at(x)
+    }
+
+    /// Tree node `node`'s visibility data resolved once, for many receiver points
+    /// ([`NodeView::at`] gives what [`Self::node`] gives).
+    pub(super) fn node_view(&self, node: u32) -> NodeView<'_> {
         match self {
-            ApproxVisibility::Nodes(m) => m.visibility(node, x),
-            ApproxVisibility::NearestVpls(v) => v.ism.interpolated(&v.weights[node as usize], x),
+            ApproxVisibility::Nodes(m) => NodeView::Map(m.map(node)),
+            ApproxVisibility::NearestVpls(v) => NodeView::Vpls(&v.ism, &v.weights[node as usize]),
+        }
+    }
+}
+
+/// One tree node's approximate visibility ([`ApproxVisibility::node_view`]).
+pub(super) enum NodeView<'a> {
+    /// Its ray-cast map, or none (visible from everywhere).
+    Map(Option<MapView<'a>>),
+    /// Its nearest VPLs' imperfect shadow maps and their interpolation weights.
+    Vpls(&'a ImperfectShadowMaps, &'a [(u32, f32); 3]),
+}
+
+impl NodeView<'_> {
+    /// The node's visibility in [0, 1] from receiver point `x`.
+    #[inline]
+    pub(super) fn at(&self, x: Vec3) -> f32 {
+        match self {
+            NodeView::Map(m) => node_map_visibility(m.as_ref(), x),
+            NodeView::Vpls(ism, weights) => ism.interpolated(weights, x),
         }
     }
 }

@@ -97,8 +97,9 @@ impl Ctx<'_> {
             done: &crate::progress::no_progress,
             cancel: progress.cancel,
         };
-        let (mut values, mut sizes) = self.tile_indirect(&glossy, side, tally, progress)?;
-        let (lv, ls) = self.tile_indirect(&lattice, 2 * side, tally, &quiet)?;
+        let sums = self.tile_summaries();
+        let (mut values, mut sizes) = self.tile_indirect(&glossy, side, &sums, tally, progress)?;
+        let (lv, ls) = self.tile_indirect(&lattice, 2 * side, &sums, tally, &quiet)?;
         for i in 0..hits.len() {
             if lattice[i].is_some() {
                 values[i] = lv[i];
@@ -135,7 +136,7 @@ impl Ctx<'_> {
         }
         if any {
             // The samples left are sparse: tiles twice as wide, as in pass 1.
-            let (v2, s2) = self.tile_indirect(&second, 2 * side, tally, &quiet)?;
+            let (v2, s2) = self.tile_indirect(&second, 2 * side, &sums, tally, &quiet)?;
             for &(i, f) in &filled {
                 if f.is_none() {
                     values[i] = v2[i];

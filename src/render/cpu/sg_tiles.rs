@@ -7,7 +7,7 @@
 //! until the untraced rest holds at most [`RAY_TAIL`] of its estimate; the rest is weighed by
 //! the traced values' mean visibility (weighted by luminance).
 
-use super::sg::{ApproxVisibility, Ctx, SharedRays, Tally};
+use super::sg::{ApproxVisibility, Ctx, NodeView, SharedRays, Tally};
 use crate::accel::Hit;
 use crate::math::luminance;
 use crate::render::cpu::Progress;
@@ -15,6 +15,7 @@ use crate::render::cpu::surface::SurfacePoint;
 use crate::sg::group::{
     Group, GroupCut, NEAR, REPRESENTATIVES, SelectScratch, Summaries, evaluate_nodes,
 };
+use crate::sg::kernel::maps::map_visibility;
 use crate::sg::kernel::receivers::Receivers;
 use crate::sg::kernel::simd::Isa;
 use crate::sg::transport::receiver::ReceiverLobes;
@@ -103,19 +104,26 @@ pub(super) struct Sample {
 type TileOut = Vec<(usize, Vec3, f32)>;
 
 impl Ctx<'_> {
+    /// Per light: its tree's summaries for the kernel, which every [`Ctx::tile_indirect`]
+    /// call of a frame shares.
+    pub(super) fn tile_summaries(&self) -> Vec<Summaries> {
+        self.lits.iter().map(Summaries::new).collect()
+    }
+
     /// The indirect light of every sample (`hits`) with tile cuts of `side` pixels, and each
-    /// sample's cut size (summed over the lights). `None` when cancelled.
+    /// sample's cut size (summed over the lights); `summaries` are
+    /// [`Ctx::tile_summaries`]. `None` when cancelled.
     pub(super) fn tile_indirect(
         &self,
         hits: &[Option<Hit>],
         side: usize,
+        summaries: &[Summaries],
         tally: &Tally,
         progress: &Progress,
     ) -> Option<(Vec<Vec3>, Vec<f32>)> {
-        let summaries: Vec<Summaries> = self.lits.iter().map(Summaries::new).collect();
         let pass = Pass {
             isa: Isa::detect(),
-            summaries: &summaries,
+            summaries,
             split: split_min(),
             near: near(),
             share: share_min(),
@@ -306,9 +314,15 @@ impl Ctx<'_> {
             };
             match self.vpl_vis(k) {
                 Some(vv) => {
-                    for (j, s) in group.iter().enumerate() {
-                        radiance[j] += approx_visible(vv, &cut.nodes, |i| value(j, i), s.xo);
-                    }
+                    approx_visible(
+                        isa,
+                        vv,
+                        &cut.nodes,
+                        group,
+                        value,
+                        &mut sc.approx,
+                        &mut radiance,
+                    );
                 }
                 None => {
                     rays += self.traced_group(
@@ -486,21 +500,61 @@ fn halve(group: &mut [Sample]) -> (&mut [Sample], &mut [Sample]) {
     group.split_at_mut(mid)
 }
 
-/// A sample's radiance over a cut with the visibility maps of `--visibility approx`.
+/// The group's radiance over a cut with the visibility maps of `--visibility approx`, added to
+/// `radiance`: sample j's is Σ_i value(j, i) · visibility(node i, its point), summed in the
+/// cut's order. The nodes run in the outer loop, so each node's map is resolved once, its
+/// texels stay in cache while every sample of the group reads them, and a node map is read
+/// for all the samples at once on the lanes of `isa` (`sg::kernel::maps`, bit for bit the
+/// scalar lookup; `docs/sg-performance.md`: "The approx lookups, node by node").
 fn approx_visible(
+    isa: Isa,
     vv: &ApproxVisibility,
     nodes: &[u32],
-    value: impl Fn(usize) -> Vec3,
-    xo: Vec3,
-) -> Vec3 {
-    let mut l = Vec3::ZERO;
+    group: &[Sample],
+    value: impl Fn(usize, usize) -> Vec3,
+    sc: &mut ApproxScratch,
+    radiance: &mut [Vec3],
+) {
+    let n = group.len();
+    for (k, p) in sc.points.iter_mut().enumerate() {
+        p.clear();
+        p.extend(group.iter().map(|s| s.xo[k]));
+    }
+    sc.lit.clear();
+    sc.lit.resize(n, Vec3::ZERO);
+    sc.vis.resize(n, 0.0);
     for (i, &node) in nodes.iter().enumerate() {
-        let v = value(i);
-        if v != Vec3::ZERO {
-            l += v * vv.node(node, xo);
+        let vis = &mut sc.vis[..n];
+        match vv.node_view(node) {
+            NodeView::Map(Some(map)) => {
+                let [x, y, z] = &sc.points;
+                map_visibility(isa, &map, [x, y, z], 1.0, vis);
+            }
+            view => {
+                for (v, s) in vis.iter_mut().zip(group) {
+                    *v = view.at(s.xo);
+                }
+            }
+        }
+        for (j, (l, &f)) in sc.lit.iter_mut().zip(vis.iter()).enumerate() {
+            let v = value(j, i);
+            if v != Vec3::ZERO {
+                *l += v * f;
+            }
         }
     }
-    l
+    for (r, l) in radiance.iter_mut().zip(&sc.lit) {
+        *r += *l;
+    }
+}
+
+/// Per-thread buffers of [`approx_visible`]: the group's points (x, y and z), one node's
+/// visibility of each and each sample's sum.
+#[derive(Default)]
+struct ApproxScratch {
+    points: [Vec<f32>; 3],
+    vis: Vec<f32>,
+    lit: Vec<Vec3>,
 }
 
 /// Where a sample's values over the cut are: the selection's column of representative r
@@ -519,6 +573,7 @@ struct TileScratch {
     select: SelectScratch,
     cut: GroupCut,
     values: Vec<Vec3>,
+    approx: ApproxScratch,
     /// Per sample of the group: where its values are (see `shade_group`).
     source: Vec<Column>,
     rays: RayScratch,

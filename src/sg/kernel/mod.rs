@@ -3,12 +3,14 @@
 //! `sg::cluster`, `sg::bound`) stays the oracle the kernels are tested against.
 //!
 //! - [`triangle`]: the integral of an SG over a spherical triangle.
+//! - [`maps`]: the node maps' visibility lookups (`--visibility approx`) for many points.
 //!
 //! Speed and accuracy: `docs/sg-performance.md`, `results/sg-performance.md`.
 
 pub mod cluster;
 pub mod leaf;
 pub mod lobes;
+pub mod maps;
 pub mod receivers;
 pub mod simd;
 pub mod triangle;
