@@ -326,36 +326,15 @@ impl ImperfectShadowMaps {
 /// One map of [`ImperfectShadowMaps`], its origin, texels and constants looked up once.
 #[derive(Clone, Copy)]
 pub struct MapView<'a> {
-    y: Vec3,
-    frame: &'a Frame,
-    moments: &'a [Vec2],
-    res: usize,
-    bias: f32,
-    min_variance: f32,
+    pub(crate) y: Vec3,
+    pub(crate) frame: &'a Frame,
+    pub(crate) moments: &'a [Vec2],
+    pub(crate) res: usize,
+    pub(crate) bias: f32,
+    pub(crate) min_variance: f32,
 }
 
-/// A [`MapView`]'s fields, for the lanes' lookup (`sg::kernel::maps`).
-pub(crate) struct MapViewParts<'a> {
-    pub y: Vec3,
-    pub frame: &'a Frame,
-    pub moments: &'a [Vec2],
-    pub res: usize,
-    pub bias: f32,
-    pub min_variance: f32,
-}
-
-impl<'a> MapView<'a> {
-    pub(crate) fn parts(&self) -> MapViewParts<'a> {
-        MapViewParts {
-            y: self.y,
-            frame: self.frame,
-            moments: self.moments,
-            res: self.res,
-            bias: self.bias,
-            min_variance: self.min_variance,
-        }
-    }
-
+impl MapView<'_> {
     /// The map's visibility of `p`, or `None` below its horizon (where it knows nothing); see
     /// [`ImperfectShadowMaps::visibility`].
     #[inline]

@@ -7,7 +7,7 @@
 //! "The approx lookups, node by node", has what it saves.
 
 use super::simd::{Isa, Kernel, Vf, dispatch};
-use crate::visibility::ism::{MapView, MapViewParts};
+use crate::visibility::ism::MapView;
 use glam::Vec3;
 
 /// `out[j]`: the visibility that `map` gives point j of `points` (x, y and z, as long as
@@ -43,11 +43,10 @@ impl Kernel for Lookup<'_> {
             none,
             out,
         } = self;
-        let parts = map.parts();
         let n = out.len();
         let full = n - n % V::N;
         for j in (0..full).step_by(V::N) {
-            lookup::<V>(&parts, [&px[j..], &py[j..], &pz[j..]], none).store(&mut out[j..]);
+            lookup::<V>(map, [&px[j..], &py[j..], &pz[j..]], none).store(&mut out[j..]);
         }
         for j in full..n {
             out[j] = map
@@ -61,7 +60,7 @@ impl Kernel for Lookup<'_> {
 /// lookup). No closures here: a closure would not inherit the AVX2 entry point's target
 /// feature and would call the intrinsics out of line (`simd` module docs).
 #[inline(always)]
-fn lookup<V: Vf>(m: &MapViewParts, p: [&[f32]; 3], none: f32) -> V {
+fn lookup<V: Vf>(m: &MapView, p: [&[f32]; 3], none: f32) -> V {
     let (zero, one, half) = (V::splat(0.0), V::splat(1.0), V::splat(0.5));
     // paraboloid(): the direction from the map's origin in its frame.
     let vx = V::load(p[0]) - V::splat(m.y.x);
